@@ -1,0 +1,123 @@
+//! The CPU reference path: one plain-Rust twin per GPU stage, run in the same order on the
+//! same data, single-threaded so that it is the readable definition of the physics.
+
+mod bending_forces;
+mod integrate;
+mod spring_forces;
+mod wind_forces;
+
+pub use bending_forces::{bending_forces, hinge_force};
+pub use integrate::integrate;
+pub use spring_forces::spring_forces;
+pub use wind_forces::wind_forces;
+
+use crate::error::Error;
+use crate::gpu::layout::{Hinge, SimParams, SpringRef, SubstepParams};
+use crate::model::{ClothModel, Csr};
+use crate::plan::{Pass, PassPlan};
+use crate::solver::{AdapterReport, ParticleState, Solver};
+use glam::Vec4;
+
+/// The CPU backend. Holds data only for the stages in its plan.
+pub struct CpuSolver {
+    params: SimParams,
+    plan: PassPlan,
+    /// Positions, w = inverse mass.
+    pub pos: Vec<Vec4>,
+    /// Velocities.
+    pub vel: Vec<Vec4>,
+    /// Force accumulator, cleared by `integrate`.
+    pub force: Vec<Vec4>,
+    springs: Option<Csr<SpringRef>>,
+    hinges: Option<(Vec<Hinge>, Csr<u32>)>,
+    triangles: Option<(Vec<[u32; 4]>, Csr<u32>)>,
+}
+
+impl CpuSolver {
+    /// A CPU solver for `model` running `plan`.
+    pub fn new(model: &ClothModel, params: SimParams, plan: &PassPlan) -> Self {
+        let n = model.len();
+        CpuSolver {
+            params,
+            plan: plan.clone(),
+            pos: model.packed_positions(),
+            vel: model.packed_velocities(),
+            force: vec![Vec4::ZERO; n],
+            springs: plan.contains(Pass::SpringForces).then(|| model.spring_csr()),
+            hinges: plan
+                .contains(Pass::BendingForces)
+                .then(|| (model.hinges.clone(), model.hinge_csr())),
+            triangles: plan
+                .contains(Pass::WindForces)
+                .then(|| (model.packed_triangles(), model.triangle_csr())),
+        }
+    }
+
+    /// The stages this solver holds data for (its plan).
+    pub fn plan(&self) -> &PassPlan {
+        &self.plan
+    }
+
+    /// Runs one stage once. Panics if the stage is not in the plan: that is a caller bug.
+    pub fn run_pass(&mut self, pass: Pass, step: &SubstepParams) {
+        let p = &self.params;
+        match pass {
+            Pass::SpringForces => {
+                let csr = self.springs.as_ref().expect("spring_forces is not in the plan");
+                spring_forces(p, &self.pos, &self.vel, &mut self.force, &csr.offsets, &csr.items);
+            }
+            Pass::BendingForces => {
+                let (hinges, csr) = self.hinges.as_ref().expect("bending_forces is not in the plan");
+                bending_forces(p, &self.pos, &mut self.force, &csr.offsets, &csr.items, hinges);
+            }
+            Pass::WindForces => {
+                let (tris, csr) = self.triangles.as_ref().expect("wind_forces is not in the plan");
+                wind_forces(
+                    p,
+                    step,
+                    &self.pos,
+                    &self.vel,
+                    &mut self.force,
+                    &csr.offsets,
+                    &csr.items,
+                    tris,
+                );
+            }
+            Pass::Integrate => integrate(p, &mut self.pos, &mut self.vel, &mut self.force),
+        }
+    }
+
+    /// Replaces positions and velocities (and clears forces), e.g. to start parity tests from
+    /// one recorded state.
+    pub fn set_state(&mut self, state: &ParticleState) {
+        self.pos.clone_from(&state.positions);
+        self.vel.clone_from(&state.velocities);
+        self.force.fill(Vec4::ZERO);
+    }
+}
+
+impl Solver for CpuSolver {
+    fn backend_name(&self) -> &'static str {
+        "cpu"
+    }
+
+    fn adapter(&self) -> Option<AdapterReport> {
+        None
+    }
+
+    fn advance(&mut self, steps: &[SubstepParams]) -> Result<(), Error> {
+        for step in steps {
+            for i in 0..self.plan.passes.len() {
+                self.run_pass(self.plan.passes[i], step);
+            }
+        }
+        Ok(())
+    }
+
+    fn state(&mut self) -> Result<ParticleState, Error> {
+        Ok(ParticleState {
+            positions: self.pos.clone(),
+            velocities: self.vel.clone(),
+        })
+    }
+}

@@ -1,0 +1,32 @@
+//! CPU twin of `kernels/spring_forces.wgsl`.
+
+use crate::gpu::layout::{SimParams, SpringRef};
+use glam::Vec4;
+
+/// Adds each particle's spring forces to `force`, gathered over its CSR springs.
+pub fn spring_forces(
+    params: &SimParams,
+    pos: &[Vec4],
+    vel: &[Vec4],
+    force: &mut [Vec4],
+    spring_offsets: &[u32],
+    springs: &[SpringRef],
+) {
+    for i in 0..params.num_particles as usize {
+        let xi = pos[i].truncate();
+        let vi = vel[i].truncate();
+        let mut f = glam::Vec3::ZERO;
+        for k in spring_offsets[i]..spring_offsets[i + 1] {
+            let s = springs[k as usize];
+            let d = pos[s.other as usize].truncate() - xi;
+            let len = d.length();
+            if len > 1e-12 {
+                let dir = d / len;
+                let stretch = len - s.rest_length;
+                let closing_speed = (vel[s.other as usize].truncate() - vi).dot(dir);
+                f += (s.stiffness * stretch + s.damping * closing_speed) * dir;
+            }
+        }
+        force[i] += f.extend(0.0);
+    }
+}

@@ -1,0 +1,100 @@
+//! Errors, split by who must act: bad input (the user fixes a file, exit 2), an unstable
+//! simulation (the user changes the scene, exit 3), and environment failures (exit 1).
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// Everything drapekit can fail with.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A scene, mesh or pattern file is wrong; the message says where and how to fix it.
+    #[error("{0}")]
+    Input(#[from] InputError),
+    /// The simulation produced a non-finite value or left its stable range.
+    #[error("simulation stopped: {0}")]
+    Unstable(String),
+    /// The GPU backend could not be created or failed while running.
+    #[error("GPU backend: {0}")]
+    Gpu(String),
+    /// Reading or writing a file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file that could not be read or written.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+}
+
+impl Error {
+    /// Process exit code for this error: 2 for bad input, 3 for an unstable run, 1 otherwise.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            Error::Input(_) => 2,
+            Error::Unstable(_) => 3,
+            Error::Gpu(_) | Error::Io { .. } => 1,
+        }
+    }
+
+    /// Wraps an I/O error with the path it concerns.
+    pub fn io(path: &Path, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+}
+
+/// A problem with a user's file: which file, where in it, what is wrong, and what to do.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputError {
+    /// The file at fault.
+    pub file: PathBuf,
+    /// 1-based line, where the format gives one.
+    pub line: Option<usize>,
+    /// The key, panel, edge or item at fault, e.g. `fabric.density_kg_m2` or `pins[1]`.
+    pub location: String,
+    /// What is wrong.
+    pub problem: String,
+    /// What to do about it.
+    pub fix: String,
+}
+
+impl InputError {
+    /// A new error about `location` in `file`.
+    pub fn new(
+        file: &Path,
+        location: impl Into<String>,
+        problem: impl Into<String>,
+        fix: impl Into<String>,
+    ) -> Self {
+        InputError {
+            file: file.to_path_buf(),
+            line: None,
+            location: location.into(),
+            problem: problem.into(),
+            fix: fix.into(),
+        }
+    }
+
+    /// The same error with a line number.
+    pub fn at_line(mut self, line: Option<usize>) -> Self {
+        self.line = line;
+        self
+    }
+}
+
+impl fmt::Display for InputError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file.display())?;
+        if let Some(line) = self.line {
+            write!(f, ":{line}")?;
+        }
+        if !self.location.is_empty() {
+            write!(f, ": {}", self.location)?;
+        }
+        write!(f, ": {}\n  fix: {}", self.problem, self.fix)
+    }
+}
+
+impl std::error::Error for InputError {}

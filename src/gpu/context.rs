@@ -1,0 +1,124 @@
+//! Adapter choice and device creation.
+
+use crate::error::Error;
+use crate::solver::AdapterReport;
+use std::str::FromStr;
+
+/// Which adapter to run on.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum AdapterChoice {
+    /// `WGPU_ADAPTER_NAME` if set, else wgpu's high-performance choice.
+    Auto,
+    /// wgpu's fallback (software) adapter, e.g. Mesa lavapipe.
+    Fallback,
+    /// The first adapter whose name contains this text (case-insensitive).
+    Named(String),
+}
+
+impl FromStr for AdapterChoice {
+    type Err = std::convert::Infallible;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Ok(match s {
+            "auto" => AdapterChoice::Auto,
+            "fallback" => AdapterChoice::Fallback,
+            name => AdapterChoice::Named(name.to_string()),
+        })
+    }
+}
+
+/// Storage buffers one stage binds at most (wind_forces: 6); requested from the adapter.
+const STORAGE_BUFFERS_PER_STAGE: u32 = 8;
+
+/// A device and queue on a chosen adapter. Cheap to clone (wgpu handles are shared).
+#[derive(Clone, Debug)]
+pub struct GpuContext {
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// What the adapter says about itself.
+    pub info: wgpu::AdapterInfo,
+}
+
+impl GpuContext {
+    /// Opens a device on the chosen adapter.
+    pub fn new(choice: &AdapterChoice) -> Result<Self, Error> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let choice = match (choice, std::env::var("WGPU_ADAPTER_NAME")) {
+            (AdapterChoice::Auto, Ok(name)) if !name.is_empty() => AdapterChoice::Named(name),
+            (c, _) => c.clone(),
+        };
+        let adapter = match &choice {
+            AdapterChoice::Named(name) => {
+                let wanted = name.to_lowercase();
+                let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+                let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
+                adapters
+                    .into_iter()
+                    .find(|a| a.get_info().name.to_lowercase().contains(&wanted))
+                    .ok_or_else(|| {
+                        Error::Gpu(format!(
+                            "no adapter name contains {name:?}; available: {names:?}"
+                        ))
+                    })?
+            }
+            AdapterChoice::Auto | AdapterChoice::Fallback => {
+                let options = wgpu::RequestAdapterOptions {
+                    power_preference: wgpu::PowerPreference::HighPerformance,
+                    force_fallback_adapter: choice == AdapterChoice::Fallback,
+                    ..Default::default()
+                };
+                pollster::block_on(instance.request_adapter(&options)).map_err(|e| {
+                    Error::Gpu(format!(
+                        "no {} adapter: {e}. On Debian/Ubuntu the software adapter comes with \
+                         `apt-get install -y mesa-vulkan-drivers libvulkan1`",
+                        if choice == AdapterChoice::Fallback { "fallback" } else { "GPU" }
+                    ))
+                })?
+            }
+        };
+        let info = adapter.get_info();
+        let available = adapter.limits();
+        if available.max_storage_buffers_per_shader_stage < STORAGE_BUFFERS_PER_STAGE {
+            return Err(Error::Gpu(format!(
+                "adapter {:?} allows {} storage buffers per stage; drapekit needs {}",
+                info.name, available.max_storage_buffers_per_shader_stage, STORAGE_BUFFERS_PER_STAGE
+            )));
+        }
+        let required_limits = wgpu::Limits {
+            max_storage_buffers_per_shader_stage: STORAGE_BUFFERS_PER_STAGE,
+            max_storage_buffer_binding_size: available.max_storage_buffer_binding_size,
+            max_buffer_size: available.max_buffer_size,
+            ..wgpu::Limits::downlevel_defaults()
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("drapekit"),
+            required_limits,
+            ..Default::default()
+        }))
+        .map_err(|e| Error::Gpu(format!("cannot open a device on {:?}: {e}", info.name)))?;
+        Ok(GpuContext {
+            device,
+            queue,
+            info,
+        })
+    }
+
+    /// The adapter as reported in summaries and benchmarks.
+    pub fn report(&self) -> AdapterReport {
+        AdapterReport {
+            name: self.info.name.clone(),
+            driver: self.info.driver.clone(),
+            backend: format!("{:?}", self.info.backend).to_lowercase(),
+            device_type: match self.info.device_type {
+                wgpu::DeviceType::Other => "other",
+                wgpu::DeviceType::IntegratedGpu => "integrated_gpu",
+                wgpu::DeviceType::DiscreteGpu => "discrete_gpu",
+                wgpu::DeviceType::VirtualGpu => "virtual_gpu",
+                wgpu::DeviceType::Cpu => "cpu",
+            }
+            .to_string(),
+        }
+    }
+}

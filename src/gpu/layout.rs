@@ -1,0 +1,81 @@
+//! `#[repr(C)]` mirrors of the structs in `kernels/common.wgsl`. Keep in sync with that file;
+//! `tests/layout.rs` checks every size and field offset against naga's reflection of it.
+
+use bytemuck::{Pod, Zeroable};
+
+/// Run-constant values (WGSL `SimParams`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SimParams {
+    /// Gravity in m/s² (xyz); w unused.
+    pub gravity: [f32; 4],
+    /// Number of particles.
+    pub num_particles: u32,
+    /// 0 = explicit Euler, 1 = semi-implicit Euler.
+    pub integrator: u32,
+    /// Substep length in s.
+    pub dt: f32,
+    /// Air damping rate in 1/s.
+    pub air_damping: f32,
+    /// Air density in kg/m³ for wind drag.
+    pub air_density: f32,
+    /// Drag coefficient for wind drag.
+    pub drag_coefficient: f32,
+    /// Padding to a 16-byte multiple.
+    pub _pad0: u32,
+    /// Padding to a 16-byte multiple.
+    pub _pad1: u32,
+}
+
+/// Per-substep values (WGSL `SubstepParams`), one per substep at a 256-byte stride.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SubstepParams {
+    /// Wind velocity in m/s (xyz); w unused.
+    pub wind: [f32; 4],
+    /// Simulated time at the start of the substep, in s.
+    pub time: f32,
+    /// Index of the substep within its frame.
+    pub substep: u32,
+    /// Padding.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+}
+
+/// One spring seen from one of its ends (WGSL `SpringRef`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SpringRef {
+    /// The particle at the other end.
+    pub other: u32,
+    /// Rest length in m.
+    pub rest_length: f32,
+    /// Stiffness in N/m.
+    pub stiffness: f32,
+    /// Damping along the spring in N·s/m.
+    pub damping: f32,
+}
+
+/// A dihedral bending hinge (WGSL `Hinge`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Hinge {
+    /// Shared edge (x, y) and opposite vertices (z, w).
+    pub v: [u32; 4],
+    /// Bending stiffness in N·m.
+    pub stiffness: f32,
+    /// sin(θ0/2) of the rest angle θ0.
+    pub rest_sin_half: f32,
+    /// Padding.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+}
+
+/// Integrator codes shared with `integrate.wgsl`.
+pub const INTEGRATOR_EXPLICIT: u32 = 0;
+/// Semi-implicit (symplectic) Euler.
+pub const INTEGRATOR_SYMPLECTIC: u32 = 1;
+/// Threads per workgroup, as `WORKGROUP_SIZE` in common.wgsl.
+pub const WORKGROUP_SIZE: u32 = 64;

@@ -1,0 +1,22 @@
+//! drapekit: a cloth and garment solver whose simulation runs as WGSL compute passes on wgpu,
+//! with a plain-Rust twin of every pass as the reference.
+//!
+//! The data path: [`scene::Scene`] → [`model::ClothModel`] → [`plan::PassPlan`] →
+//! a [`solver::Solver`] ([`gpu::GpuSolver`] or [`cpu::CpuSolver`]) → frames and a summary.
+#![warn(missing_docs)]
+
+pub mod bench;
+pub mod cpu;
+pub mod error;
+pub mod gpu;
+pub mod mesh;
+pub mod metrics;
+pub mod model;
+pub mod output;
+pub mod plan;
+pub mod run;
+pub mod scene;
+pub mod sim;
+pub mod solver;
+
+pub use error::{Error, InputError};

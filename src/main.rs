@@ -1,0 +1,132 @@
+//! The `drapekit` command line: parses arguments, calls the library, reports.
+
+use clap::{Parser, Subcommand};
+use drapekit::gpu::AdapterChoice;
+use drapekit::run::{run_scene, BackendChoice, RunOptions};
+use drapekit::scene::Scene;
+use drapekit::Error;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "drapekit", version, about = "Cloth and garment simulation on wgpu, with a CPU twin of every pass")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Simulate a scene and write OBJ frames and summary.json.
+    Run {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Output folder (default: [output] dir, else out/<scene name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// auto: the GPU if an adapter exists, else the CPU; cpu; gpu.
+        #[arg(long, default_value = "auto")]
+        backend: BackendChoice,
+        /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
+        #[arg(long, default_value = "auto")]
+        adapter: AdapterChoice,
+        /// Override the number of output frames.
+        #[arg(long)]
+        frames: Option<u32>,
+    },
+    /// Print the pass plan a scene compiles to.
+    Plan {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Print JSON: {"passes": [...], ...}.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Time whole substeps on both backends and write CSV and Markdown tables.
+    Bench {
+        /// Grid sizes: N means an N×N particle grid.
+        #[arg(long, value_delimiter = ',', default_value = "64,128,256")]
+        sizes: Vec<u32>,
+        /// Substeps per timed batch (one submission on the GPU).
+        #[arg(long, default_value_t = 100)]
+        substeps: u32,
+        /// Timed batches per size and backend; the median is reported.
+        #[arg(long, default_value_t = 5)]
+        repeats: u32,
+        /// Output folder for bench.csv and bench.md.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
+        #[arg(long, default_value = "auto")]
+        adapter: AdapterChoice,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match execute(cli.command) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("drapekit: {e}");
+            ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}
+
+fn execute(command: Command) -> Result<(), Error> {
+    match command {
+        Command::Run { scene, out, backend, adapter, frames } => {
+            let scene = Scene::load(&scene)?;
+            let opts = RunOptions { backend, adapter, out_dir: out.clone(), frames };
+            let out_dir = out.unwrap_or_else(|| scene.output.dir.clone());
+            let summary = run_scene(&scene, &opts)?;
+            let device = summary.adapter.as_ref().map_or("single-threaded CPU".to_string(), |a| {
+                format!("{} ({}, {})", a.name, a.backend, a.device_type)
+            });
+            println!(
+                "simulated {:.2} s ({} frames × {} substeps, {}) on the {} backend [{}] in {:.2} s: {:.3e} particle-substeps/s",
+                summary.simulated_seconds,
+                summary.frames,
+                summary.substeps_per_frame,
+                summary.integrator,
+                summary.backend,
+                device,
+                summary.wall_seconds,
+                summary.particle_substeps_per_second
+            );
+            if let Some(s) = &summary.settled {
+                println!("settled at frame {} ({})", s.frame, s.rule);
+            }
+            println!("wrote {} files to {}", summary.outputs.len(), out_dir.display());
+            Ok(())
+        }
+        Command::Plan { scene, json } => {
+            let scene = Scene::load(&scene)?;
+            let prep = drapekit::sim::prepare(&scene)?;
+            let plan = serde_json::json!({
+                "passes": prep.plan.names(),
+                "particles": prep.model.len(),
+                "triangles": prep.model.triangles.len(),
+                "springs": prep.model.springs.len(),
+                "hinges": if prep.plan.contains(drapekit::plan::Pass::BendingForces) { prep.model.hinges.len() } else { 0 },
+                "pinned": prep.model.pinned.iter().filter(|p| **p).count(),
+                "substeps_per_frame": prep.substeps,
+                "substeps_source": if prep.auto_substeps { "auto" } else { "scene" },
+                "dt": prep.params.dt,
+                "stable_dt_estimate_s": prep.stable_dt,
+            });
+            if json {
+                println!("{}", serde_json::to_string_pretty(&plan).expect("plan serialises"));
+            } else {
+                println!("{}: {} particles, {} substeps/frame (dt = {:.3e} s, {})", scene.path.display(), prep.model.len(), prep.substeps, prep.params.dt, if prep.auto_substeps { "auto" } else { "from the scene" });
+                for (k, pass) in prep.plan.passes.iter().enumerate() {
+                    println!("  {}. {:<15} kernels/{}.wgsl  ↔  src/cpu/{}.rs", k + 1, pass.name(), pass.name(), pass.name());
+                }
+            }
+            Ok(())
+        }
+        Command::Bench { sizes, substeps, repeats, out, adapter } => {
+            drapekit::bench::run_cli(&sizes, substeps, repeats, &out, &adapter)
+        }
+    }
+}

@@ -1,0 +1,94 @@
+//! Result files: OBJ frames and `summary.json`, each written atomically (temp file, rename).
+
+use crate::error::Error;
+use crate::sim::Settled;
+use crate::solver::AdapterReport;
+use glam::Vec4;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Writes `bytes` to `path` through a temporary file in the same folder and a rename, so that a
+/// reader never sees a half-written file.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    std::fs::write(&tmp, bytes).map_err(|e| Error::io(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        Error::io(path, e)
+    })
+}
+
+/// A Wavefront OBJ of the cloth at one frame (positions in m).
+pub fn obj_text(positions: &[Vec4], triangles: &[[u32; 3]]) -> String {
+    let mut s = String::with_capacity(positions.len() * 40 + triangles.len() * 24);
+    s.push_str("# drapekit frame, units: m\n");
+    for p in positions {
+        let _ = writeln!(s, "v {} {} {}", p.x, p.y, p.z);
+    }
+    for t in triangles {
+        let _ = writeln!(s, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1);
+    }
+    s
+}
+
+/// `summary.json`. Field names are stable: later versions add fields, never rename them.
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    /// The scene file.
+    pub scene: String,
+    /// "cpu" or "gpu".
+    pub backend: String,
+    /// Why the backend differs from the one asked for, if it does.
+    pub backend_note: Option<String>,
+    /// The GPU adapter (name, driver, backend, device_type), or null on the CPU.
+    pub adapter: Option<AdapterReport>,
+    /// Particles.
+    pub particles: usize,
+    /// Triangles.
+    pub triangles: usize,
+    /// Stretch springs.
+    pub springs: usize,
+    /// Bending hinges.
+    pub hinges: usize,
+    /// Output frames simulated.
+    pub frames: u32,
+    /// Output frames asked for.
+    pub frames_requested: u32,
+    /// Output frames per simulated second.
+    pub fps: f32,
+    /// Substeps per output frame.
+    pub substeps_per_frame: u32,
+    /// "auto" (from the stability estimate) or "scene".
+    pub substeps_source: &'static str,
+    /// Estimated largest stable substep in s.
+    pub stable_dt_estimate_s: Option<f32>,
+    /// Substep length in s.
+    pub dt: f32,
+    /// "explicit" or "symplectic".
+    pub integrator: &'static str,
+    /// Simulated time in s.
+    pub simulated_seconds: f64,
+    /// Wall time of stepping and readback in s (setup and file writing excluded).
+    pub wall_seconds: f64,
+    /// Particles × substeps / wall_seconds.
+    pub particle_substeps_per_second: f64,
+    /// The pass plan, by stage name.
+    pub passes: Vec<&'static str>,
+    /// Largest spring strain at any output frame.
+    pub max_edge_strain: f32,
+    /// Kinetic energy at the last good frame, in J.
+    pub kinetic_energy_j: f64,
+    /// Whether every frame was finite.
+    pub finite: bool,
+    /// Set when the settle rule stopped the run early.
+    pub settled: Option<Settled>,
+    /// Warnings about the setup.
+    pub warnings: Vec<String>,
+    /// The error that stopped the run, if any.
+    pub error: Option<String>,
+    /// Files written, relative to the output folder.
+    pub outputs: Vec<String>,
+}

@@ -1,0 +1,90 @@
+//! The pass plan: the ordered stages a scene needs. A stage the scene does not use is absent,
+//! and both backends build pipelines, buffers and CPU data only for the stages in the plan.
+
+use crate::model::ClothModel;
+use serde::Serialize;
+
+/// One simulation stage: one kernel in `kernels/`, one CPU twin in `src/cpu/`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Pass {
+    /// Stretch springs on mesh edges.
+    SpringForces,
+    /// Dihedral bending on interior edges.
+    BendingForces,
+    /// Per-triangle wind drag.
+    WindForces,
+    /// Euler integration; always last.
+    Integrate,
+}
+
+impl Pass {
+    /// Every stage, in execution order.
+    pub const ALL: [Pass; 4] = [
+        Pass::SpringForces,
+        Pass::BendingForces,
+        Pass::WindForces,
+        Pass::Integrate,
+    ];
+
+    /// The stage name shared by the kernel file, the CPU twin, tests and bench ids.
+    pub fn name(self) -> &'static str {
+        match self {
+            Pass::SpringForces => "spring_forces",
+            Pass::BendingForces => "bending_forces",
+            Pass::WindForces => "wind_forces",
+            Pass::Integrate => "integrate",
+        }
+    }
+
+    /// The stage's WGSL source, without `common.wgsl`.
+    pub fn kernel_source(self) -> &'static str {
+        match self {
+            Pass::SpringForces => include_str!("../kernels/spring_forces.wgsl"),
+            Pass::BendingForces => include_str!("../kernels/bending_forces.wgsl"),
+            Pass::WindForces => include_str!("../kernels/wind_forces.wgsl"),
+            Pass::Integrate => include_str!("../kernels/integrate.wgsl"),
+        }
+    }
+}
+
+/// What a scene asks for beyond its mesh.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Effects {
+    /// Bending stiffness is set.
+    pub bending: bool,
+    /// A wind section is present.
+    pub wind: bool,
+}
+
+/// The ordered passes of one substep.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PassPlan {
+    /// Stages in execution order.
+    pub passes: Vec<Pass>,
+}
+
+impl PassPlan {
+    /// The plan for a model and the effects its scene asks for.
+    pub fn new(model: &ClothModel, effects: Effects) -> Self {
+        let wanted = |pass: &Pass| match pass {
+            Pass::SpringForces => !model.springs.is_empty(),
+            Pass::BendingForces => effects.bending && !model.hinges.is_empty(),
+            Pass::WindForces => effects.wind && !model.triangles.is_empty(),
+            Pass::Integrate => true,
+        };
+        PassPlan {
+            passes: Pass::ALL.into_iter().filter(wanted).collect(),
+        }
+    }
+
+    /// Whether the plan runs `pass`.
+    pub fn contains(&self, pass: Pass) -> bool {
+        self.passes.contains(&pass)
+    }
+
+    /// Stage names in order.
+    pub fn names(&self) -> Vec<&'static str> {
+        self.passes.iter().map(|p| p.name()).collect()
+    }
+}

@@ -1,0 +1,217 @@
+//! From a scene to a prepared run (model, plan, substeps), and the frame loop shared by both
+//! backends: one `advance` per output frame, one readback per output frame.
+
+use crate::error::Error;
+use crate::gpu::layout::{SimParams, SubstepParams};
+use crate::metrics;
+use crate::model::ClothModel;
+use crate::plan::PassPlan;
+use crate::scene::{Scene, Wind};
+use crate::solver::{ParticleState, Solver};
+use serde::Serialize;
+use std::time::Instant;
+
+/// Fraction of the estimated stable step that `substeps = "auto"` uses.
+pub const AUTO_DT_SAFETY: f32 = 0.5;
+
+/// Everything a backend needs, derived from a scene.
+#[derive(Clone, Debug)]
+pub struct Prepared {
+    /// The cloth.
+    pub model: ClothModel,
+    /// Run-constant GPU parameters.
+    pub params: SimParams,
+    /// The stages to run.
+    pub plan: PassPlan,
+    /// Substeps per output frame.
+    pub substeps: u32,
+    /// Whether `substeps` came from the stability estimate.
+    pub auto_substeps: bool,
+    /// Estimated largest stable substep in s (`None`: no stable step exists).
+    pub stable_dt: Option<f32>,
+    /// Output frame length in s.
+    pub frame_dt: f32,
+    /// Output frames.
+    pub frames: u32,
+    /// Wind, if any.
+    pub wind: Option<Wind>,
+    /// Settle threshold on kinetic energy per free particle, in J.
+    pub settle_ke_per_particle: Option<f32>,
+    /// Things the user should know (e.g. a substep above the stable estimate).
+    pub warnings: Vec<String>,
+}
+
+/// Builds the model and plan and chooses the substep count.
+pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
+    let model = scene.build_model()?;
+    let plan = PassPlan::new(&model, scene.effects());
+    let s = &scene.solver;
+    let frame_dt = 1.0 / s.fps;
+    let stable_dt = model.stable_dt(s.integrator, scene.air_damping);
+    let mut warnings = Vec::new();
+    let (substeps, auto_substeps) = match s.substeps {
+        Some(n) => {
+            let dt = frame_dt / n as f32;
+            match stable_dt {
+                Some(bound) if dt > bound => warnings.push(format!(
+                    "substep {dt:.3e} s exceeds the estimated stable step {bound:.3e} s; \
+                     the run may blow up (use substeps = \"auto\")"
+                )),
+                None => warnings.push(
+                    "explicit Euler without damping has no stable step; energy will grow".into(),
+                ),
+                _ => {}
+            }
+            (n, false)
+        }
+        None => {
+            let Some(bound) = stable_dt else {
+                return Err(scene
+                    .error(
+                        "fabric",
+                        "damping_ratio",
+                        "explicit Euler has no stable substep without damping",
+                        "set fabric.damping_ratio above 0, or use integrator = \"symplectic\"",
+                    )
+                    .into());
+            };
+            let n = (frame_dt / (AUTO_DT_SAFETY * bound)).ceil().max(1.0);
+            if n > s.max_substeps_per_frame as f32 {
+                return Err(scene
+                    .error(
+                        "solver",
+                        "substeps",
+                        format!(
+                        "the fabric needs {n:.0} substeps per frame (stable step {bound:.2e} s), \
+                         above max_substeps_per_frame = {}",
+                        s.max_substeps_per_frame
+                    ),
+                        "lower stretch_stiffness_n_m, coarsen the cloth, or raise solver.max_substeps_per_frame",
+                    )
+                    .into());
+            }
+            (n as u32, true)
+        }
+    };
+    let dt = frame_dt / substeps as f32;
+    let wind = scene.wind;
+    let params = SimParams {
+        gravity: scene.gravity.extend(0.0).to_array(),
+        num_particles: model.len() as u32,
+        integrator: s.integrator,
+        dt,
+        air_damping: scene.air_damping,
+        air_density: wind.map_or(0.0, |w| w.air_density),
+        drag_coefficient: wind.map_or(0.0, |w| w.drag_coefficient),
+        _pad0: 0,
+        _pad1: 0,
+    };
+    Ok(Prepared {
+        model,
+        params,
+        plan,
+        substeps,
+        auto_substeps,
+        stable_dt,
+        frame_dt,
+        frames: s.frames,
+        wind,
+        settle_ke_per_particle: s.settle_ke_per_particle,
+        warnings,
+    })
+}
+
+/// The per-substep values of output frame `frame` (1-based): its time and wind.
+pub fn substep_params(prep: &Prepared, frame: u32) -> Vec<SubstepParams> {
+    (0..prep.substeps)
+        .map(|s| {
+            let t = ((frame - 1) as f64 * prep.frame_dt as f64
+                + s as f64 * prep.params.dt as f64) as f32;
+            let wind = prep.wind.map_or(glam::Vec3::ZERO, |w| w.at(t));
+            SubstepParams {
+                wind: wind.extend(0.0).to_array(),
+                time: t,
+                substep: s,
+                _pad0: 0,
+                _pad1: 0,
+            }
+        })
+        .collect()
+}
+
+/// Why a run ended early.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Settled {
+    /// The frame at which the rule fired.
+    pub frame: u32,
+    /// Which rule fired.
+    pub rule: &'static str,
+    /// Kinetic energy per free particle then, in J.
+    pub kinetic_energy_per_particle_j: f64,
+}
+
+/// What a run measured, filled in frame by frame (so it is complete up to a failure).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunStats {
+    /// Frames simulated.
+    pub frames_run: u32,
+    /// Seconds spent in `advance` and readback (not in writing files).
+    pub wall_seconds: f64,
+    /// Largest spring strain seen at any output frame.
+    pub max_edge_strain: f32,
+    /// Kinetic energy at the last good frame, in J.
+    pub kinetic_energy_j: f64,
+    /// Whether every frame was finite.
+    pub finite: bool,
+    /// Set when the settle rule stopped the run.
+    pub settled: Option<Settled>,
+}
+
+/// Runs `prep.frames` output frames on `solver`, calling `on_frame` with each finite frame
+/// (frame 0 is the initial state). A non-finite frame stops the run with an error naming the
+/// frame and the first bad particle; `on_frame` never sees it.
+pub fn simulate(
+    prep: &Prepared,
+    solver: &mut dyn Solver,
+    stats: &mut RunStats,
+    mut on_frame: impl FnMut(u32, &ParticleState) -> Result<(), Error>,
+) -> Result<(), Error> {
+    let initial = solver.state()?;
+    stats.finite = metrics::first_non_finite(&initial).is_none();
+    on_frame(0, &initial)?;
+    let free = prep.model.pinned.iter().filter(|p| !**p).count().max(1) as f64;
+    for frame in 1..=prep.frames {
+        let steps = substep_params(prep, frame);
+        let start = Instant::now();
+        solver.advance(&steps)?;
+        let state = solver.state()?;
+        stats.wall_seconds += start.elapsed().as_secs_f64();
+        if let Some((i, what)) = metrics::first_non_finite(&state) {
+            stats.finite = false;
+            return Err(Error::Unstable(format!(
+                "frame {frame}: particle {i} has a non-finite {what}; the frame was not written. \
+                 The substep ({:.3e} s) is too large for the fabric's stiffness: use \
+                 substeps = \"auto\" or more substeps",
+                prep.params.dt
+            )));
+        }
+        stats.frames_run = frame;
+        stats.max_edge_strain = stats
+            .max_edge_strain
+            .max(metrics::max_edge_strain(&state.positions, &prep.model.springs));
+        stats.kinetic_energy_j = metrics::kinetic_energy(&prep.model, &state);
+        on_frame(frame, &state)?;
+        if let Some(threshold) = prep.settle_ke_per_particle {
+            let per_particle = stats.kinetic_energy_j / free;
+            if per_particle < threshold as f64 {
+                stats.settled = Some(Settled {
+                    frame,
+                    rule: "kinetic_energy_per_particle",
+                    kinetic_energy_per_particle_j: per_particle,
+                });
+                break;
+            }
+        }
+    }
+    Ok(())
+}

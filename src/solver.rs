@@ -1,0 +1,44 @@
+//! What both backends offer the run loop: advance a batch of substeps, read the state back.
+
+use crate::error::Error;
+use crate::gpu::layout::SubstepParams;
+use glam::Vec4;
+use serde::Serialize;
+
+/// Particle positions (w = inverse mass) and velocities, as read back at an output frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ParticleState {
+    /// xyz in m, w = inverse mass.
+    pub positions: Vec<Vec4>,
+    /// xyz in m/s.
+    pub velocities: Vec<Vec4>,
+}
+
+/// Which device ran a simulation.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct AdapterReport {
+    /// Adapter name, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)".
+    pub name: String,
+    /// Driver name.
+    pub driver: String,
+    /// Graphics API backend, e.g. "vulkan".
+    pub backend: String,
+    /// "cpu", "discrete_gpu", …
+    pub device_type: String,
+}
+
+/// A simulation backend: the CPU reference path or the wgpu path.
+pub trait Solver {
+    /// "cpu" or "gpu".
+    fn backend_name(&self) -> &'static str;
+    /// The GPU adapter, if any.
+    fn adapter(&self) -> Option<AdapterReport>;
+    /// Runs one substep per entry of `steps`, in order (one submission on the GPU).
+    fn advance(&mut self, steps: &[SubstepParams]) -> Result<(), Error>;
+    /// Reads positions and velocities back.
+    fn state(&mut self) -> Result<ParticleState, Error>;
+    /// Waits until submitted work has finished, without reading anything back (for timing).
+    fn finish(&mut self) -> Result<(), Error> {
+        Ok(())
+    }
+}

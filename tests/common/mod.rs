@@ -1,0 +1,88 @@
+//! Shared test helpers: one fallback-adapter device per test binary, and seeded states.
+#![allow(dead_code)] // each test binary uses a different subset
+
+use drapekit::gpu::{AdapterChoice, GpuContext};
+use drapekit::solver::ParticleState;
+use glam::Vec4;
+use std::sync::OnceLock;
+
+/// The fallback (software) adapter's device, shared by every test in this binary because
+/// creating a device per test is slow on lavapipe and can exhaust threads.
+/// Returns `None` (and says so) without an adapter; under `CI=true` that is a failure.
+pub fn gpu() -> Option<&'static GpuContext> {
+    static CTX: OnceLock<Result<GpuContext, String>> = OnceLock::new();
+    let ctx = CTX.get_or_init(|| {
+        if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+            // Silences the Vulkan loader's harmless XDG_RUNTIME_DIR warnings.
+            std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir());
+        }
+        GpuContext::new(&AdapterChoice::Fallback).map_err(|e| e.to_string())
+    });
+    match ctx {
+        Ok(ctx) => Some(ctx),
+        Err(e) => {
+            let ci = std::env::var("CI").map(|v| v == "true" || v == "1").unwrap_or(false);
+            assert!(
+                !ci,
+                "CI=true but no fallback GPU adapter: {e}\n\
+                 install Mesa lavapipe: apt-get install -y mesa-vulkan-drivers libvulkan1"
+            );
+            eprintln!("SKIPPED (no GPU adapter, not under CI): {e}");
+            None
+        }
+    }
+}
+
+/// A tiny deterministic generator (xorshift) so that tests need no extra crate.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Rng(seed.max(1))
+    }
+    /// Uniform in [-1, 1).
+    pub fn signed(&mut self) -> f32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 40) as f32 / (1u64 << 23) as f32 - 1.0
+    }
+    pub fn vec3(&mut self, scale: f32) -> glam::Vec3 {
+        glam::Vec3::new(self.signed(), self.signed(), self.signed()) * scale
+    }
+}
+
+/// `state` with every free particle displaced by up to `dx` m and moving at up to `dv` m/s.
+pub fn perturbed(state: &ParticleState, seed: u64, dx: f32, dv: f32) -> ParticleState {
+    let mut rng = Rng::new(seed);
+    let positions = state
+        .positions
+        .iter()
+        .map(|p| (p.truncate() + rng.vec3(dx)).extend(p.w))
+        .collect();
+    let velocities = state
+        .velocities
+        .iter()
+        .zip(&state.positions)
+        .map(|(_, p)| if p.w == 0.0 { Vec4::ZERO } else { rng.vec3(dv).extend(0.0) })
+        .collect();
+    ParticleState { positions, velocities }
+}
+
+/// Largest component-wise |a − b| over two vec4 lists (xyz only).
+pub fn max_abs_diff(a: &[Vec4], b: &[Vec4]) -> f32 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x.truncate() - y.truncate()).abs().max_element())
+        .fold(0.0, f32::max)
+}
+
+/// Largest |v| over a vec4 list (xyz only).
+pub fn max_norm(a: &[Vec4]) -> f32 {
+    a.iter().map(|v| v.truncate().length()).fold(0.0, f32::max)
+}
+
+/// Path of a shipped fixture.
+pub fn fixture(rel: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures").join(rel)
+}

@@ -1,0 +1,38 @@
+//! Every kernel, composed with common.wgsl, validates with naga and builds a pipeline.
+
+mod common;
+
+use drapekit::gpu::kernels::{compose, validate_wgsl, COMMON_WGSL};
+use drapekit::plan::Pass;
+
+#[test]
+fn naga_validates_every_kernel() {
+    for pass in Pass::ALL {
+        let label = format!("kernels/{}.wgsl", pass.name());
+        if let Err(report) = validate_wgsl(&label, &compose(pass)) {
+            panic!("{report}");
+        }
+    }
+}
+
+#[test]
+fn every_kernel_file_is_a_pass() {
+    // A kernel file without a Pass would never be validated or run.
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("kernels");
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let name = entry.unwrap().file_name().into_string().unwrap();
+        let stem = name.trim_end_matches(".wgsl");
+        assert!(
+            stem == "common" || Pass::ALL.iter().any(|p| p.name() == stem),
+            "kernels/{name} has no Pass"
+        );
+    }
+}
+
+#[test]
+fn validation_errors_point_at_the_line() {
+    let broken = format!("{COMMON_WGSL}\nfn main() {{ let x: f32 = 1u; }}\n");
+    let report = validate_wgsl("broken.wgsl", &broken).unwrap_err();
+    let line = COMMON_WGSL.lines().count() + 2;
+    assert!(report.contains(&format!("broken.wgsl:{line}")), "{report}");
+}

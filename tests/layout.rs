@@ -1,0 +1,92 @@
+//! The Rust mirrors in src/gpu/layout.rs match kernels/common.wgsl byte for byte: sizes and
+//! every field offset, as naga lays the WGSL structs out.
+
+use drapekit::gpu::kernels::{validate_wgsl, COMMON_WGSL};
+use drapekit::gpu::layout::{Hinge, SimParams, SpringRef, SubstepParams};
+use std::mem::{offset_of, size_of};
+
+fn wgsl_layout(name: &str) -> (u32, Vec<(String, u32)>) {
+    let module = validate_wgsl("common.wgsl", COMMON_WGSL).expect("common.wgsl validates");
+    for (_, ty) in module.types.iter() {
+        if ty.name.as_deref() == Some(name) {
+            if let naga::TypeInner::Struct { members, span } = &ty.inner {
+                let fields = members.iter().map(|m| (m.name.clone().unwrap(), m.offset)).collect();
+                return (*span, fields);
+            }
+        }
+    }
+    panic!("struct {name} not found in common.wgsl");
+}
+
+fn check(name: &str, rust_size: usize, rust_offsets: &[(&str, usize)]) {
+    let (span, fields) = wgsl_layout(name);
+    assert_eq!(span as usize, rust_size, "{name}: size");
+    assert_eq!(fields.len(), rust_offsets.len(), "{name}: field count");
+    for ((wname, woff), (rname, roff)) in fields.iter().zip(rust_offsets) {
+        assert_eq!(wname, rname, "{name}: field order");
+        assert_eq!(*woff as usize, *roff, "{name}.{wname}: offset");
+    }
+}
+
+#[test]
+fn sim_params_layout() {
+    check(
+        "SimParams",
+        size_of::<SimParams>(),
+        &[
+            ("gravity", offset_of!(SimParams, gravity)),
+            ("num_particles", offset_of!(SimParams, num_particles)),
+            ("integrator", offset_of!(SimParams, integrator)),
+            ("dt", offset_of!(SimParams, dt)),
+            ("air_damping", offset_of!(SimParams, air_damping)),
+            ("air_density", offset_of!(SimParams, air_density)),
+            ("drag_coefficient", offset_of!(SimParams, drag_coefficient)),
+            ("_pad0", offset_of!(SimParams, _pad0)),
+            ("_pad1", offset_of!(SimParams, _pad1)),
+        ],
+    );
+}
+
+#[test]
+fn substep_params_layout() {
+    check(
+        "SubstepParams",
+        size_of::<SubstepParams>(),
+        &[
+            ("wind", offset_of!(SubstepParams, wind)),
+            ("time", offset_of!(SubstepParams, time)),
+            ("substep", offset_of!(SubstepParams, substep)),
+            ("_pad0", offset_of!(SubstepParams, _pad0)),
+            ("_pad1", offset_of!(SubstepParams, _pad1)),
+        ],
+    );
+}
+
+#[test]
+fn spring_ref_layout() {
+    check(
+        "SpringRef",
+        size_of::<SpringRef>(),
+        &[
+            ("other", offset_of!(SpringRef, other)),
+            ("rest_length", offset_of!(SpringRef, rest_length)),
+            ("stiffness", offset_of!(SpringRef, stiffness)),
+            ("damping", offset_of!(SpringRef, damping)),
+        ],
+    );
+}
+
+#[test]
+fn hinge_layout() {
+    check(
+        "Hinge",
+        size_of::<Hinge>(),
+        &[
+            ("v", offset_of!(Hinge, v)),
+            ("stiffness", offset_of!(Hinge, stiffness)),
+            ("rest_sin_half", offset_of!(Hinge, rest_sin_half)),
+            ("_pad0", offset_of!(Hinge, _pad0)),
+            ("_pad1", offset_of!(Hinge, _pad1)),
+        ],
+    );
+}

@@ -1,0 +1,122 @@
+//! GPU vs CPU: each pass from one identical state, and whole trajectories of the hanging cloth.
+
+mod common;
+
+use common::{fixture, gpu, max_abs_diff, max_norm, perturbed};
+use drapekit::cpu::CpuSolver;
+use drapekit::gpu::layout::{SubstepParams, INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC};
+use drapekit::gpu::GpuSolver;
+use drapekit::plan::Pass;
+use drapekit::scene::Scene;
+use drapekit::sim::{prepare, simulate, substep_params, Prepared, RunStats};
+use drapekit::solver::Solver;
+
+/// The flag scene (springs, bending, wind: every pass) from a perturbed state.
+fn flag() -> Prepared {
+    let scene = Scene::load(&fixture("scenes/flag_wind.toml")).unwrap();
+    prepare(&scene).unwrap()
+}
+
+fn pass_parity(pass: Pass) {
+    let Some(ctx) = gpu() else { return };
+    let prep = flag();
+    assert!(prep.plan.contains(pass));
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
+    // 5 mm and 0.5 m/s perturbations give every spring, hinge and triangle a non-trivial force.
+    let state = perturbed(&cpu.state().unwrap(), 7, 5e-3, 0.5);
+    cpu.set_state(&state);
+    gpu.set_state(&state);
+    let step: SubstepParams = substep_params(&prep, 3)[5];
+    cpu.run_pass(pass, &step);
+    gpu.run_passes(&[pass], &[step]).unwrap();
+    if pass == Pass::Integrate {
+        // Forces are zero here, so integrate adds dt·(g − γv) to v and dt·v to x. Positions are
+        // O(2 m) and f32 has a 2^-24 relative step: one rounding of each term gives ≤ 4e-7 m,
+        // and FMA contraction on the GPU may differ by one such rounding.
+        let g = gpu.state().unwrap();
+        let dx = max_abs_diff(&g.positions, &cpu.pos);
+        let dv = max_abs_diff(&g.velocities, &cpu.vel);
+        assert!(dx <= 4e-7, "positions differ by {dx} m");
+        assert!(dv <= 4e-7, "velocities differ by {dv} m/s");
+    } else {
+        // Each force is a sum of up to ~12 terms, each a product of a few f32 operations. The
+        // worst amplification is the cancellation in (|d| − L0): |d| ≈ 3 cm carries a rounding of
+        // 2^-24·3 cm ≈ 2e-9 m against stretches of ~1 mm, a relative 2e-6 of the term. So the
+        // two backends may differ by a few 1e-6 of the largest force; 2e-5 leaves 10× margin.
+        let f_gpu = gpu.forces().unwrap();
+        let scale = max_norm(&cpu.force);
+        assert!(scale > 0.0, "{} produced no force", pass.name());
+        let diff = max_abs_diff(&f_gpu, &cpu.force);
+        assert!(diff <= 2e-5 * scale, "{}: max diff {diff} N vs max force {scale} N", pass.name());
+    }
+}
+
+#[test]
+fn parity_spring_forces() {
+    pass_parity(Pass::SpringForces);
+}
+
+#[test]
+fn parity_bending_forces() {
+    pass_parity(Pass::BendingForces);
+}
+
+#[test]
+fn parity_wind_forces() {
+    pass_parity(Pass::WindForces);
+}
+
+#[test]
+fn parity_integrate() {
+    pass_parity(Pass::Integrate);
+}
+
+/// Runs the hanging cloth for 2 simulated seconds on both backends and compares every frame.
+fn trajectory_parity(integrator: u32) {
+    let Some(ctx) = gpu() else { return };
+    let mut scene = Scene::load(&fixture("scenes/hanging_cloth.toml")).unwrap();
+    // 16×16 keeps the explicit run (whose stable step is ζ-limited) short on lavapipe.
+    if let drapekit::scene::ClothSource::Grid { columns, rows, .. } = &mut scene.cloth {
+        *columns = 16;
+        *rows = 16;
+    }
+    scene.solver.integrator = integrator;
+    scene.solver.frames = 48; // 2 s at 24 fps
+    let prep = prepare(&scene).unwrap();
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, prep.substeps as usize).unwrap();
+    let mut cpu_frames = Vec::new();
+    simulate(&prep, &mut cpu, &mut RunStats::default(), |_, s| {
+        cpu_frames.push(s.positions.clone());
+        Ok(())
+    })
+    .unwrap();
+    let mut worst = (0.0f32, 0usize);
+    simulate(&prep, &mut gpu, &mut RunStats::default(), |f, s| {
+        let d = max_abs_diff(&s.positions, &cpu_frames[f as usize]);
+        if d > worst.0 {
+            worst = (d, f as usize);
+        }
+        Ok(())
+    })
+    .unwrap();
+    let steps = prep.frames as f32 * prep.substeps as f32;
+    // Each substep may round differently on the two backends by ~1 ulp of a 1.5 m position
+    // (2^-24·1.5 ≈ 9e-8 m). The scene is damped (ζ = 0.1 per spring, 0.2/s air) and hangs
+    // towards one equilibrium, so differences are not amplified; if they simply added up, after
+    // N substeps they would reach N·9e-8 m. Allow that linear bound.
+    let bound = steps * 9e-8;
+    eprintln!("integrator {integrator}: max deviation {:.3e} m at frame {} (bound {bound:.3e} m over {steps} substeps)", worst.0, worst.1);
+    assert!(worst.0 <= bound, "deviation {} m at frame {} exceeds {bound} m", worst.0, worst.1);
+}
+
+#[test]
+fn trajectory_parity_symplectic() {
+    trajectory_parity(INTEGRATOR_SYMPLECTIC);
+}
+
+#[test]
+fn trajectory_parity_explicit() {
+    trajectory_parity(INTEGRATOR_EXPLICIT);
+}
