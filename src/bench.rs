@@ -26,7 +26,13 @@ pub fn bench_model(n: u32) -> (ClothModel, SimParams, PassPlan) {
         damping_ratio: 0.05,
     };
     let model = ClothModel::from_mesh(&mesh, &fabric, &[(n - 1) * n, n * n - 1]);
-    let plan = PassPlan::new(&model, Effects { bending: true, wind: false });
+    let plan = PassPlan::new(
+        &model,
+        Effects {
+            bending: true,
+            wind: false,
+        },
+    );
     let dt = 0.5 * model.stable_dt(INTEGRATOR_SYMPLECTIC, 0.0).unwrap_or(1e-4);
     let params = SimParams {
         gravity: [0.0, -9.81, 0.0, 0.0],
@@ -41,7 +47,11 @@ pub fn bench_model(n: u32) -> (ClothModel, SimParams, PassPlan) {
 /// `count` substeps' parameters starting at time 0.
 pub fn bench_steps(count: u32, dt: f32) -> Vec<SubstepParams> {
     (0..count)
-        .map(|s| SubstepParams { time: s as f32 * dt, substep: s, ..Default::default() })
+        .map(|s| SubstepParams {
+            time: s as f32 * dt,
+            substep: s,
+            ..Default::default()
+        })
         .collect()
 }
 
@@ -62,7 +72,11 @@ pub struct BenchRow {
     pub particle_substeps_per_second: f64,
 }
 
-fn median_batch(solver: &mut dyn Solver, steps: &[SubstepParams], repeats: u32) -> Result<f64, Error> {
+fn median_batch(
+    solver: &mut dyn Solver,
+    steps: &[SubstepParams],
+    repeats: u32,
+) -> Result<f64, Error> {
     // One untimed batch warms caches and (on the GPU) pipeline state.
     solver.advance(steps)?;
     solver.finish()?;
@@ -81,14 +95,27 @@ fn median_batch(solver: &mut dyn Solver, steps: &[SubstepParams], repeats: u32) 
 pub fn cpu_description() -> String {
     let model = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("model name")).and_then(|l| l.split(':').nth(1)).map(|m| m.trim().to_string()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
         .unwrap_or_else(|| std::env::consts::ARCH.to_string());
-    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
     format!("{model}, {cores} cores")
 }
 
 /// Times whole substeps for each size on the CPU twin and the GPU path.
-pub fn run_cli(sizes: &[u32], substeps: u32, repeats: u32, out: &Path, adapter: &AdapterChoice) -> Result<(), Error> {
+pub fn run_cli(
+    sizes: &[u32],
+    substeps: u32,
+    repeats: u32,
+    out: &Path,
+    adapter: &AdapterChoice,
+) -> Result<(), Error> {
     let ctx = match GpuContext::new(adapter) {
         Ok(ctx) => Some(ctx),
         Err(e) => {
@@ -104,14 +131,33 @@ pub fn run_cli(sizes: &[u32], substeps: u32, repeats: u32, out: &Path, adapter: 
         let work = model.len() as f64 * substeps as f64;
         let mut cpu = CpuSolver::new(&model, params, &plan);
         let t = median_batch(&mut cpu, &steps, repeats)?;
-        rows.push(BenchRow { size: n, particles: model.len(), backend: "cpu".into(), device: cpu_name.clone(), median_seconds: t, particle_substeps_per_second: work / t });
+        rows.push(BenchRow {
+            size: n,
+            particles: model.len(),
+            backend: "cpu".into(),
+            device: cpu_name.clone(),
+            median_seconds: t,
+            particle_substeps_per_second: work / t,
+        });
         if let Some(ctx) = &ctx {
             let mut gpu = GpuSolver::new(ctx, &model, params, &plan, substeps as usize)?;
             let t = median_batch(&mut gpu, &steps, repeats)?;
             let a = ctx.report();
-            rows.push(BenchRow { size: n, particles: model.len(), backend: "gpu".into(), device: format!("{} ({}, {})", a.name, a.backend, a.device_type), median_seconds: t, particle_substeps_per_second: work / t });
+            rows.push(BenchRow {
+                size: n,
+                particles: model.len(),
+                backend: "gpu".into(),
+                device: format!("{} ({}, {})", a.name, a.backend, a.device_type),
+                median_seconds: t,
+                particle_substeps_per_second: work / t,
+            });
         }
-        for r in rows.iter().rev().take(if ctx.is_some() { 2 } else { 1 }).rev() {
+        for r in rows
+            .iter()
+            .rev()
+            .take(if ctx.is_some() { 2 } else { 1 })
+            .rev()
+        {
             println!("{:>4}² {:>3}  {:>12.3e} particle-substeps/s  ({:.4} s per {substeps} substeps)  {}", r.size, r.backend, r.particle_substeps_per_second, r.median_seconds, r.device);
         }
     }
@@ -123,11 +169,32 @@ pub fn run_cli(sizes: &[u32], substeps: u32, repeats: u32, out: &Path, adapter: 
          | grid | particles | backend | particle-substeps/s | s per batch | device |\n|---|---|---|---|---|---|\n"
     );
     for r in &rows {
-        csv.push_str(&format!("{},{},{},\"{}\",{},{:.6},{:.1}\n", r.size, r.particles, r.backend, r.device, substeps, r.median_seconds, r.particle_substeps_per_second));
-        md.push_str(&format!("| {}² | {} | {} | {:.3e} | {:.4} | {} |\n", r.size, r.particles, r.backend, r.particle_substeps_per_second, r.median_seconds, r.device));
+        csv.push_str(&format!(
+            "{},{},{},\"{}\",{},{:.6},{:.1}\n",
+            r.size,
+            r.particles,
+            r.backend,
+            r.device,
+            substeps,
+            r.median_seconds,
+            r.particle_substeps_per_second
+        ));
+        md.push_str(&format!(
+            "| {}² | {} | {} | {:.3e} | {:.4} | {} |\n",
+            r.size,
+            r.particles,
+            r.backend,
+            r.particle_substeps_per_second,
+            r.median_seconds,
+            r.device
+        ));
     }
     write_atomic(&out.join("bench.csv"), csv.as_bytes())?;
     write_atomic(&out.join("bench.md"), md.as_bytes())?;
-    println!("wrote {} and {}", out.join("bench.csv").display(), out.join("bench.md").display());
+    println!(
+        "wrote {} and {}",
+        out.join("bench.csv").display(),
+        out.join("bench.md").display()
+    );
     Ok(())
 }

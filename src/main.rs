@@ -9,7 +9,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "drapekit", version, about = "Cloth and garment simulation on wgpu, with a CPU twin of every pass")]
+#[command(
+    name = "drapekit",
+    version,
+    about = "Cloth and garment simulation on wgpu, with a CPU twin of every pass"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -75,14 +79,28 @@ fn main() -> ExitCode {
 
 fn execute(command: Command) -> Result<(), Error> {
     match command {
-        Command::Run { scene, out, backend, adapter, frames } => {
+        Command::Run {
+            scene,
+            out,
+            backend,
+            adapter,
+            frames,
+        } => {
             let scene = Scene::load(&scene)?;
-            let opts = RunOptions { backend, adapter, out_dir: out.clone(), frames };
+            let opts = RunOptions {
+                backend,
+                adapter,
+                out_dir: out.clone(),
+                frames,
+            };
             let out_dir = out.unwrap_or_else(|| scene.output.dir.clone());
             let summary = run_scene(&scene, &opts)?;
-            let device = summary.adapter.as_ref().map_or("single-threaded CPU".to_string(), |a| {
-                format!("{} ({}, {})", a.name, a.backend, a.device_type)
-            });
+            let device = summary
+                .adapter
+                .as_ref()
+                .map_or("single-threaded CPU".to_string(), |a| {
+                    format!("{} ({}, {})", a.name, a.backend, a.device_type)
+                });
             println!(
                 "simulated {:.2} s ({} frames × {} substeps, {}) on the {} backend [{}] in {:.2} s: {:.3e} particle-substeps/s",
                 summary.simulated_seconds,
@@ -97,7 +115,11 @@ fn execute(command: Command) -> Result<(), Error> {
             if let Some(s) = &summary.settled {
                 println!("settled at frame {} ({})", s.frame, s.rule);
             }
-            println!("wrote {} files to {}", summary.outputs.len(), out_dir.display());
+            println!(
+                "wrote {} files to {}",
+                summary.outputs.len(),
+                out_dir.display()
+            );
             Ok(())
         }
         Command::Plan { scene, json } => {
@@ -116,17 +138,41 @@ fn execute(command: Command) -> Result<(), Error> {
                 "stable_dt_estimate_s": prep.stable_dt,
             });
             if json {
-                println!("{}", serde_json::to_string_pretty(&plan).expect("plan serialises"));
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&plan).expect("plan serialises")
+                );
             } else {
-                println!("{}: {} particles, {} substeps/frame (dt = {:.3e} s, {})", scene.path.display(), prep.model.len(), prep.substeps, prep.params.dt, if prep.auto_substeps { "auto" } else { "from the scene" });
+                println!(
+                    "{}: {} particles, {} substeps/frame (dt = {:.3e} s, {})",
+                    scene.path.display(),
+                    prep.model.len(),
+                    prep.substeps,
+                    prep.params.dt,
+                    if prep.auto_substeps {
+                        "auto"
+                    } else {
+                        "from the scene"
+                    }
+                );
                 for (k, pass) in prep.plan.passes.iter().enumerate() {
-                    println!("  {}. {:<15} kernels/{}.wgsl  ↔  src/cpu/{}.rs", k + 1, pass.name(), pass.name(), pass.name());
+                    println!(
+                        "  {}. {:<15} kernels/{}.wgsl  ↔  src/cpu/{}.rs",
+                        k + 1,
+                        pass.name(),
+                        pass.name(),
+                        pass.name()
+                    );
                 }
             }
             Ok(())
         }
-        Command::Bench { sizes, substeps, repeats, out, adapter } => {
-            drapekit::bench::run_cli(&sizes, substeps, repeats, &out, &adapter)
-        }
+        Command::Bench {
+            sizes,
+            substeps,
+            repeats,
+            out,
+            adapter,
+        } => drapekit::bench::run_cli(&sizes, substeps, repeats, &out, &adapter),
     }
 }

@@ -8,7 +8,9 @@ use glam::Vec4;
 pub fn kinetic_energy(model: &ClothModel, state: &ParticleState) -> f64 {
     (0..model.len())
         .filter(|&i| !model.pinned[i])
-        .map(|i| 0.5 * model.masses[i] as f64 * state.velocities[i].truncate().length_squared() as f64)
+        .map(|i| {
+            0.5 * model.masses[i] as f64 * state.velocities[i].truncate().length_squared() as f64
+        })
         .sum()
 }
 

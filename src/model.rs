@@ -126,7 +126,8 @@ impl ClothModel {
             if rest_length <= 0.0 {
                 continue;
             }
-            let stiffness = fabric.stretch_stiffness * edge_area[&edge.v] / (rest_length * rest_length);
+            let stiffness =
+                fabric.stretch_stiffness * edge_area[&edge.v] / (rest_length * rest_length);
             let (ma, mb) = (masses[a as usize], masses[b as usize]);
             let reduced_mass = ma * mb / (ma + mb);
             let damping = 2.0 * fabric.damping_ratio * (stiffness * reduced_mass).sqrt();
@@ -228,7 +229,10 @@ impl ClothModel {
 
     /// Triangles padded to `vec4<u32>` for the GPU.
     pub fn packed_triangles(&self) -> Vec<[u32; 4]> {
-        self.triangles.iter().map(|t| [t[0], t[1], t[2], 0]).collect()
+        self.triangles
+            .iter()
+            .map(|t| [t[0], t[1], t[2], 0])
+            .collect()
     }
 
     /// An estimate of the largest stable substep, in s, for the given integrator.
@@ -281,7 +285,11 @@ impl ClothModel {
                 zeta_min = zeta_min.min(gamma / (2.0 * omega_sq.sqrt()));
             }
         }
-        let damping_bound = if gamma_max > 0.0 { 2.0 / gamma_max } else { f32::INFINITY };
+        let damping_bound = if gamma_max > 0.0 {
+            2.0 / gamma_max
+        } else {
+            f32::INFINITY
+        };
         if integrator == INTEGRATOR_EXPLICIT {
             if omega_sq_max == 0.0 {
                 return Some(damping_bound);

@@ -1,12 +1,12 @@
 //! `drapekit run`: scene → prepared run → backend → frames and summary on disk.
 
+use crate::cpu::CpuSolver;
 use crate::error::Error;
 use crate::gpu::layout::INTEGRATOR_EXPLICIT;
 use crate::gpu::{AdapterChoice, GpuContext, GpuSolver};
 use crate::output::{obj_text, write_atomic, Summary};
 use crate::scene::Scene;
 use crate::sim::{prepare, simulate, Prepared, RunStats};
-use crate::cpu::CpuSolver;
 use crate::solver::Solver;
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -56,14 +56,23 @@ pub fn make_solver(
     let cpu = || Box::new(CpuSolver::new(&prep.model, prep.params, &prep.plan)) as Box<dyn Solver>;
     let gpu = |ctx: &GpuContext| -> Result<Box<dyn Solver>, Error> {
         let batch = prep.substeps as usize;
-        Ok(Box::new(GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, batch)?))
+        Ok(Box::new(GpuSolver::new(
+            ctx,
+            &prep.model,
+            prep.params,
+            &prep.plan,
+            batch,
+        )?))
     };
     match choice {
         BackendChoice::Cpu => Ok((cpu(), None)),
         BackendChoice::Gpu => Ok((gpu(&GpuContext::new(adapter)?)?, None)),
         BackendChoice::Auto => match GpuContext::new(adapter) {
             Ok(ctx) => Ok((gpu(&ctx)?, None)),
-            Err(e) => Ok((cpu(), Some(format!("no GPU adapter, ran on the CPU path ({e})")))),
+            Err(e) => Ok((
+                cpu(),
+                Some(format!("no GPU adapter, ran on the CPU path ({e})")),
+            )),
         },
     }
 }
@@ -84,7 +93,10 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
     for w in &prep.warnings {
         eprintln!("drapekit: warning: {w}");
     }
-    let out_dir = opts.out_dir.clone().unwrap_or_else(|| scene.output.dir.clone());
+    let out_dir = opts
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| scene.output.dir.clone());
     std::fs::create_dir_all(&out_dir).map_err(|e| Error::io(&out_dir, e))?;
 
     let mut outputs = Vec::new();
@@ -93,7 +105,10 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
     let result = simulate(&prep, solver.as_mut(), &mut stats, |frame, state| {
         if scene.output.obj && frame % every == 0 {
             let name = format!("frame_{frame:04}.obj");
-            write_atomic(&out_dir.join(&name), obj_text(&state.positions, &prep.model.triangles).as_bytes())?;
+            write_atomic(
+                &out_dir.join(&name),
+                obj_text(&state.positions, &prep.model.triangles).as_bytes(),
+            )?;
             outputs.push(name);
         }
         Ok(())
@@ -108,7 +123,11 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
         particles: prep.model.len(),
         triangles: prep.model.triangles.len(),
         springs: prep.model.springs.len(),
-        hinges: if prep.plan.contains(crate::plan::Pass::BendingForces) { prep.model.hinges.len() } else { 0 },
+        hinges: if prep.plan.contains(crate::plan::Pass::BendingForces) {
+            prep.model.hinges.len()
+        } else {
+            0
+        },
         frames: stats.frames_run,
         frames_requested: prep.frames,
         fps: scene.solver.fps,
@@ -116,7 +135,11 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
         substeps_source: if prep.auto_substeps { "auto" } else { "scene" },
         stable_dt_estimate_s: prep.stable_dt,
         dt: prep.params.dt,
-        integrator: if prep.params.integrator == INTEGRATOR_EXPLICIT { "explicit" } else { "symplectic" },
+        integrator: if prep.params.integrator == INTEGRATOR_EXPLICIT {
+            "explicit"
+        } else {
+            "symplectic"
+        },
         simulated_seconds: substeps_run * prep.params.dt as f64,
         wall_seconds: stats.wall_seconds,
         particle_substeps_per_second: if stats.wall_seconds > 0.0 {

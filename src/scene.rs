@@ -382,14 +382,29 @@ struct Checker<'a> {
 }
 
 impl Checker<'_> {
-    fn err(&self, table: &str, key: &str, problem: impl Into<String>, fix: impl Into<String>) -> InputError {
-        let location = if key.is_empty() { table.to_string() } else { format!("{table}.{key}") };
+    fn err(
+        &self,
+        table: &str,
+        key: &str,
+        problem: impl Into<String>,
+        fix: impl Into<String>,
+    ) -> InputError {
+        let location = if key.is_empty() {
+            table.to_string()
+        } else {
+            format!("{table}.{key}")
+        };
         InputError::new(self.path, location, problem, fix).at_line(key_line(self.src, table, key))
     }
 
     fn finite(&self, table: &str, key: &str, v: f64) -> Result<f32, InputError> {
         if !v.is_finite() {
-            return Err(self.err(table, key, format!("{v} is not a finite number"), "write a finite decimal number"));
+            return Err(self.err(
+                table,
+                key,
+                format!("{v} is not a finite number"),
+                "write a finite decimal number",
+            ));
         }
         Ok(v as f32)
     }
@@ -397,7 +412,12 @@ impl Checker<'_> {
     fn positive(&self, table: &str, key: &str, v: f64, unit: &str) -> Result<f32, InputError> {
         let x = self.finite(table, key, v)?;
         if v <= 0.0 {
-            return Err(self.err(table, key, format!("must be greater than zero, got {v}"), format!("give a positive value in {unit}")));
+            return Err(self.err(
+                table,
+                key,
+                format!("must be greater than zero, got {v}"),
+                format!("give a positive value in {unit}"),
+            ));
         }
         Ok(x)
     }
@@ -405,7 +425,12 @@ impl Checker<'_> {
     fn non_negative(&self, table: &str, key: &str, v: f64, unit: &str) -> Result<f32, InputError> {
         let x = self.finite(table, key, v)?;
         if v < 0.0 {
-            return Err(self.err(table, key, format!("must not be negative, got {v}"), format!("give zero or a positive value in {unit}")));
+            return Err(self.err(
+                table,
+                key,
+                format!("must not be negative, got {v}"),
+                format!("give zero or a positive value in {unit}"),
+            ));
         }
         Ok(x)
     }
@@ -420,7 +445,12 @@ impl Checker<'_> {
 
     fn count(&self, table: &str, key: &str, v: i64, min: i64) -> Result<u32, InputError> {
         if v < min || v > u32::MAX as i64 {
-            return Err(self.err(table, key, format!("must be an integer of at least {min}, got {v}"), format!("give a whole number ≥ {min}")));
+            return Err(self.err(
+                table,
+                key,
+                format!("must be an integer of at least {min}, got {v}"),
+                format!("give a whole number ≥ {min}"),
+            ));
         }
         Ok(v as u32)
     }
@@ -430,7 +460,12 @@ impl Scene {
     /// Reads and validates a scene file.
     pub fn load(path: &Path) -> Result<Scene, InputError> {
         let src = std::fs::read_to_string(path).map_err(|e| {
-            InputError::new(path, "", format!("cannot read the scene file: {e}"), "check the path")
+            InputError::new(
+                path,
+                "",
+                format!("cannot read the scene file: {e}"),
+                "check the path",
+            )
         })?;
         Scene::parse(&src, path)
     }
@@ -438,7 +473,9 @@ impl Scene {
     /// Parses and validates scene text; `path` locates errors and relative mesh paths.
     pub fn parse(src: &str, path: &Path) -> Result<Scene, InputError> {
         let raw: RawScene = toml::from_str(src).map_err(|e| {
-            let line = e.span().map(|s| src[..s.start.min(src.len())].matches('\n').count() + 1);
+            let line = e
+                .span()
+                .map(|s| src[..s.start.min(src.len())].matches('\n').count() + 1);
             InputError::new(
                 path,
                 "",
@@ -456,7 +493,12 @@ impl Scene {
                     "xy" => GridPlane::Xy,
                     "xz" => GridPlane::Xz,
                     other => {
-                        return Err(c.err("cloth.grid", "plane", format!("unknown plane {other:?}"), "use \"xy\" (hanging) or \"xz\" (lying flat)"))
+                        return Err(c.err(
+                            "cloth.grid",
+                            "plane",
+                            format!("unknown plane {other:?}"),
+                            "use \"xy\" (hanging) or \"xz\" (lying flat)",
+                        ))
                     }
                 };
                 ClothSource::Grid {
@@ -474,7 +516,14 @@ impl Scene {
                     "dm" => 0.1,
                     "cm" => 0.01,
                     "mm" => 0.001,
-                    other => return Err(c.err("cloth.mesh", "units", format!("unknown unit {other:?}"), "use one of \"m\", \"dm\", \"cm\", \"mm\"")),
+                    other => {
+                        return Err(c.err(
+                            "cloth.mesh",
+                            "units",
+                            format!("unknown unit {other:?}"),
+                            "use one of \"m\", \"dm\", \"cm\", \"mm\"",
+                        ))
+                    }
                 };
                 ClothSource::Mesh {
                     path: base.join(&m.path),
@@ -482,31 +531,68 @@ impl Scene {
                     offset: c.vec3("cloth.mesh", "offset_m", m.offset_m)?,
                 }
             }
-            _ => return Err(c.err("cloth", "", "needs exactly one of [cloth.grid] or [cloth.mesh]", "keep one of the two sections")),
+            _ => {
+                return Err(c.err(
+                    "cloth",
+                    "",
+                    "needs exactly one of [cloth.grid] or [cloth.mesh]",
+                    "keep one of the two sections",
+                ))
+            }
         };
 
         let f = &raw.fabric;
         let fabric = Fabric {
             density: c.positive("fabric", "density_kg_m2", f.density_kg_m2, "kg/m²")?,
-            stretch_stiffness: c.positive("fabric", "stretch_stiffness_n_m", f.stretch_stiffness_n_m, "N/m")?,
+            stretch_stiffness: c.positive(
+                "fabric",
+                "stretch_stiffness_n_m",
+                f.stretch_stiffness_n_m,
+                "N/m",
+            )?,
             bending_stiffness: match f.bending_stiffness_n_m {
                 None => None,
-                Some(v) => Some(c.positive("fabric", "bending_stiffness_n_m", v, "N·m (omit the key to disable bending)")?),
+                Some(v) => Some(c.positive(
+                    "fabric",
+                    "bending_stiffness_n_m",
+                    v,
+                    "N·m (omit the key to disable bending)",
+                )?),
             },
-            damping_ratio: c.non_negative("fabric", "damping_ratio", f.damping_ratio, "fractions of critical damping")?,
+            damping_ratio: c.non_negative(
+                "fabric",
+                "damping_ratio",
+                f.damping_ratio,
+                "fractions of critical damping",
+            )?,
         };
 
         let mut pins = Vec::new();
         for (k, p) in raw.pins.iter().enumerate() {
             let table = format!("pins[{k}]");
-            let given = [p.corners.is_some(), p.edge.is_some(), p.indices.is_some(), p.box_min_m.is_some() || p.box_max_m.is_some()];
+            let given = [
+                p.corners.is_some(),
+                p.edge.is_some(),
+                p.indices.is_some(),
+                p.box_min_m.is_some() || p.box_max_m.is_some(),
+            ];
             if given.iter().filter(|&&g| g).count() != 1 {
-                return Err(c.err(&table, "", "needs exactly one selector", "give one of corners, edge, indices, or box_min_m with box_max_m"));
+                return Err(c.err(
+                    &table,
+                    "",
+                    "needs exactly one selector",
+                    "give one of corners, edge, indices, or box_min_m with box_max_m",
+                ));
             }
             let is_grid = matches!(cloth, ClothSource::Grid { .. });
             let selection = if let Some(names) = &p.corners {
                 if !is_grid {
-                    return Err(c.err(&table, "corners", "named corners exist only for [cloth.grid]", "select mesh particles with indices or box_min_m/box_max_m"));
+                    return Err(c.err(
+                        &table,
+                        "corners",
+                        "named corners exist only for [cloth.grid]",
+                        "select mesh particles with indices or box_min_m/box_max_m",
+                    ));
                 }
                 let mut corners = Vec::new();
                 for name in names {
@@ -515,50 +601,107 @@ impl Scene {
                         "top-right" => Corner::TopRight,
                         "bottom-left" => Corner::BottomLeft,
                         "bottom-right" => Corner::BottomRight,
-                        other => return Err(c.err(&table, "corners", format!("unknown corner {other:?}"), "use top-left, top-right, bottom-left or bottom-right")),
+                        other => {
+                            return Err(c.err(
+                                &table,
+                                "corners",
+                                format!("unknown corner {other:?}"),
+                                "use top-left, top-right, bottom-left or bottom-right",
+                            ))
+                        }
                     });
                 }
                 PinSelection::Corners(corners)
             } else if let Some(name) = &p.edge {
                 if !is_grid {
-                    return Err(c.err(&table, "edge", "named edges exist only for [cloth.grid]", "select mesh particles with indices or box_min_m/box_max_m"));
+                    return Err(c.err(
+                        &table,
+                        "edge",
+                        "named edges exist only for [cloth.grid]",
+                        "select mesh particles with indices or box_min_m/box_max_m",
+                    ));
                 }
                 PinSelection::Edge(match name.as_str() {
                     "top" => GridEdge::Top,
                     "bottom" => GridEdge::Bottom,
                     "left" => GridEdge::Left,
                     "right" => GridEdge::Right,
-                    other => return Err(c.err(&table, "edge", format!("unknown edge {other:?}"), "use top, bottom, left or right")),
+                    other => {
+                        return Err(c.err(
+                            &table,
+                            "edge",
+                            format!("unknown edge {other:?}"),
+                            "use top, bottom, left or right",
+                        ))
+                    }
                 })
             } else if let Some(ids) = &p.indices {
                 let mut out = Vec::new();
                 for &i in ids {
                     if i < 0 || i > u32::MAX as i64 {
-                        return Err(c.err(&table, "indices", format!("{i} is not a particle index"), "use 0-based particle indices"));
+                        return Err(c.err(
+                            &table,
+                            "indices",
+                            format!("{i} is not a particle index"),
+                            "use 0-based particle indices",
+                        ));
                     }
                     out.push(i as u32);
                 }
                 PinSelection::Indices(out)
             } else {
                 let (Some(min), Some(max)) = (p.box_min_m, p.box_max_m) else {
-                    return Err(c.err(&table, "", "a box needs both box_min_m and box_max_m", "add the missing corner"));
+                    return Err(c.err(
+                        &table,
+                        "",
+                        "a box needs both box_min_m and box_max_m",
+                        "add the missing corner",
+                    ));
                 };
-                PinSelection::Box { min: c.vec3(&table, "box_min_m", min)?, max: c.vec3(&table, "box_max_m", max)? }
+                PinSelection::Box {
+                    min: c.vec3(&table, "box_min_m", min)?,
+                    max: c.vec3(&table, "box_max_m", max)?,
+                }
             };
             pins.push(selection);
         }
 
         let gravity = c.vec3("world", "gravity_m_s2", raw.world.gravity_m_s2)?;
-        let air_damping = c.non_negative("world", "air_damping_per_s", raw.world.air_damping_per_s, "1/s")?;
+        let air_damping = c.non_negative(
+            "world",
+            "air_damping_per_s",
+            raw.world.air_damping_per_s,
+            "1/s",
+        )?;
 
         let wind = match &raw.wind {
             None => None,
             Some(w) => Some(Wind {
                 velocity: c.vec3("wind", "velocity_m_s", w.velocity_m_s)?,
-                air_density: c.positive("wind", "air_density_kg_m3", w.air_density_kg_m3, "kg/m³")?,
-                drag_coefficient: c.positive("wind", "drag_coefficient", w.drag_coefficient, "(dimensionless)")?,
-                gust_amplitude: c.non_negative("wind", "gust_amplitude", w.gust_amplitude, "fractions of the mean wind")?,
-                gust_frequency: c.non_negative("wind", "gust_frequency_hz", w.gust_frequency_hz, "Hz")?,
+                air_density: c.positive(
+                    "wind",
+                    "air_density_kg_m3",
+                    w.air_density_kg_m3,
+                    "kg/m³",
+                )?,
+                drag_coefficient: c.positive(
+                    "wind",
+                    "drag_coefficient",
+                    w.drag_coefficient,
+                    "(dimensionless)",
+                )?,
+                gust_amplitude: c.non_negative(
+                    "wind",
+                    "gust_amplitude",
+                    w.gust_amplitude,
+                    "fractions of the mean wind",
+                )?,
+                gust_frequency: c.non_negative(
+                    "wind",
+                    "gust_frequency_hz",
+                    w.gust_frequency_hz,
+                    "Hz",
+                )?,
             }),
         };
 
@@ -566,13 +709,27 @@ impl Scene {
         let substeps = match &s.substeps {
             None => None,
             Some(RawSubsteps::Word(w)) if w == "auto" => None,
-            Some(RawSubsteps::Word(w)) => return Err(c.err("solver", "substeps", format!("{w:?} is not a substep count"), "write \"auto\" or a whole number ≥ 1")),
+            Some(RawSubsteps::Word(w)) => {
+                return Err(c.err(
+                    "solver",
+                    "substeps",
+                    format!("{w:?} is not a substep count"),
+                    "write \"auto\" or a whole number ≥ 1",
+                ))
+            }
             Some(RawSubsteps::Count(n)) => Some(c.count("solver", "substeps", *n, 1)?),
         };
         let integrator = match s.integrator.as_str() {
             "explicit" => INTEGRATOR_EXPLICIT,
             "symplectic" | "semi-implicit" => INTEGRATOR_SYMPLECTIC,
-            other => return Err(c.err("solver", "integrator", format!("unknown integrator {other:?}"), "use \"explicit\" or \"symplectic\"")),
+            other => {
+                return Err(c.err(
+                    "solver",
+                    "integrator",
+                    format!("unknown integrator {other:?}"),
+                    "use \"explicit\" or \"symplectic\"",
+                ))
+            }
         };
         let solver = SolverSettings {
             fps: c.positive("solver", "fps", s.fps, "frames per second")?,
@@ -583,36 +740,81 @@ impl Scene {
                 None => None,
                 Some(v) => Some(c.positive("solver", "settle_ke_per_particle_j", v, "J")?),
             },
-            max_substeps_per_frame: c.count("solver", "max_substeps_per_frame", s.max_substeps_per_frame, 1)?,
+            max_substeps_per_frame: c.count(
+                "solver",
+                "max_substeps_per_frame",
+                s.max_substeps_per_frame,
+                1,
+            )?,
         };
 
         let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
         let output = OutputSettings {
-            dir: raw.output.dir.as_ref().map(PathBuf::from).unwrap_or_else(|| Path::new("out").join(stem)),
+            dir: raw
+                .output
+                .dir
+                .as_ref()
+                .map(PathBuf::from)
+                .unwrap_or_else(|| Path::new("out").join(stem)),
             obj: raw.output.obj,
             every: c.count("output", "every", raw.output.every, 1)?,
         };
 
-        Ok(Scene { path: path.to_path_buf(), source: src.to_string(), cloth, fabric, pins, gravity, air_damping, wind, solver, output })
+        Ok(Scene {
+            path: path.to_path_buf(),
+            source: src.to_string(),
+            cloth,
+            fabric,
+            pins,
+            gravity,
+            air_damping,
+            wind,
+            solver,
+            output,
+        })
     }
 
     /// An error about `table.key` of this scene, located at its line.
-    pub fn error(&self, table: &str, key: &str, problem: impl Into<String>, fix: impl Into<String>) -> InputError {
-        Checker { path: &self.path, src: &self.source }.err(table, key, problem, fix)
+    pub fn error(
+        &self,
+        table: &str,
+        key: &str,
+        problem: impl Into<String>,
+        fix: impl Into<String>,
+    ) -> InputError {
+        Checker {
+            path: &self.path,
+            src: &self.source,
+        }
+        .err(table, key, problem, fix)
     }
 
     /// The effects this scene asks for, for the pass plan.
     pub fn effects(&self) -> Effects {
-        Effects { bending: self.fabric.bending_stiffness.is_some(), wind: self.wind.is_some() }
+        Effects {
+            bending: self.fabric.bending_stiffness.is_some(),
+            wind: self.wind.is_some(),
+        }
     }
 
     /// The cloth's triangle mesh in metres.
     pub fn build_mesh(&self) -> Result<TriMesh, InputError> {
         match &self.cloth {
-            ClothSource::Grid { width, height, columns, rows, center, plane } => {
-                Ok(TriMesh::grid(*width, *height, *columns, *rows, *center, *plane))
-            }
-            ClothSource::Mesh { path, scale, offset } => {
+            ClothSource::Grid {
+                width,
+                height,
+                columns,
+                rows,
+                center,
+                plane,
+            } => Ok(TriMesh::grid(
+                *width, *height, *columns, *rows, *center, *plane,
+            )),
+            ClothSource::Mesh {
+                path,
+                scale,
+                offset,
+            } => {
                 let mut mesh = TriMesh::load_obj(path, *scale, "cloth.mesh.path")?;
                 for p in &mut mesh.positions {
                     *p += *offset;
@@ -624,7 +826,10 @@ impl Scene {
 
     /// The particles each pin entry selects; an entry that selects nothing is an error.
     pub fn pinned_particles(&self, mesh: &TriMesh) -> Result<Vec<u32>, InputError> {
-        let c = Checker { path: &self.path, src: &self.source };
+        let c = Checker {
+            path: &self.path,
+            src: &self.source,
+        };
         let n = mesh.positions.len() as u32;
         let mut all = Vec::new();
         for (k, pin) in self.pins.iter().enumerate() {
@@ -647,7 +852,12 @@ impl Scene {
                 },
                 (PinSelection::Indices(ids), _) => {
                     if let Some(&bad) = ids.iter().find(|&&i| i >= n) {
-                        return Err(c.err(&table, "indices", format!("particle {bad} does not exist; the cloth has {n} particles"), format!("use indices from 0 to {}", n - 1)));
+                        return Err(c.err(
+                            &table,
+                            "indices",
+                            format!("particle {bad} does not exist; the cloth has {n} particles"),
+                            format!("use indices from 0 to {}", n - 1),
+                        ));
                     }
                     ids.clone()
                 }
@@ -660,8 +870,16 @@ impl Scene {
                 _ => unreachable!("named corners and edges are refused for meshes at load time"),
             };
             if ids.is_empty() {
-                let (lo, hi) = mesh.positions.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
-                return Err(c.err(&table, "", "selects no particle", format!("the cloth spans {lo:?} to {hi:?} m; widen the selection")));
+                let (lo, hi) = mesh.positions.iter().fold(
+                    (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+                    |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+                );
+                return Err(c.err(
+                    &table,
+                    "",
+                    "selects no particle",
+                    format!("the cloth spans {lo:?} to {hi:?} m; widen the selection"),
+                ));
             }
             all.extend(ids);
         }

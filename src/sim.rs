@@ -125,8 +125,8 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
 pub fn substep_params(prep: &Prepared, frame: u32) -> Vec<SubstepParams> {
     (0..prep.substeps)
         .map(|s| {
-            let t = ((frame - 1) as f64 * prep.frame_dt as f64
-                + s as f64 * prep.params.dt as f64) as f32;
+            let t = ((frame - 1) as f64 * prep.frame_dt as f64 + s as f64 * prep.params.dt as f64)
+                as f32;
             let wind = prep.wind.map_or(glam::Vec3::ZERO, |w| w.at(t));
             SubstepParams {
                 wind: wind.extend(0.0).to_array(),
@@ -196,9 +196,10 @@ pub fn simulate(
             )));
         }
         stats.frames_run = frame;
-        stats.max_edge_strain = stats
-            .max_edge_strain
-            .max(metrics::max_edge_strain(&state.positions, &prep.model.springs));
+        stats.max_edge_strain = stats.max_edge_strain.max(metrics::max_edge_strain(
+            &state.positions,
+            &prep.model.springs,
+        ));
         stats.kinetic_energy_j = metrics::kinetic_energy(&prep.model, &state);
         on_frame(frame, &state)?;
         if let Some(threshold) = prep.settle_ke_per_particle {

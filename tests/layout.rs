@@ -10,7 +10,10 @@ fn wgsl_layout(name: &str) -> (u32, Vec<(String, u32)>) {
     for (_, ty) in module.types.iter() {
         if ty.name.as_deref() == Some(name) {
             if let naga::TypeInner::Struct { members, span } = &ty.inner {
-                let fields = members.iter().map(|m| (m.name.clone().unwrap(), m.offset)).collect();
+                let fields = members
+                    .iter()
+                    .map(|m| (m.name.clone().unwrap(), m.offset))
+                    .collect();
                 return (*span, fields);
             }
         }

@@ -48,7 +48,11 @@ fn pass_parity(pass: Pass) {
         let scale = max_norm(&cpu.force);
         assert!(scale > 0.0, "{} produced no force", pass.name());
         let diff = max_abs_diff(&f_gpu, &cpu.force);
-        assert!(diff <= 2e-5 * scale, "{}: max diff {diff} N vs max force {scale} N", pass.name());
+        assert!(
+            diff <= 2e-5 * scale,
+            "{}: max diff {diff} N vs max force {scale} N",
+            pass.name()
+        );
     }
 }
 
@@ -85,7 +89,14 @@ fn trajectory_parity(integrator: u32) {
     scene.solver.frames = 48; // 2 s at 24 fps
     let prep = prepare(&scene).unwrap();
     let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
-    let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, prep.substeps as usize).unwrap();
+    let mut gpu = GpuSolver::new(
+        ctx,
+        &prep.model,
+        prep.params,
+        &prep.plan,
+        prep.substeps as usize,
+    )
+    .unwrap();
     let mut cpu_frames = Vec::new();
     simulate(&prep, &mut cpu, &mut RunStats::default(), |_, s| {
         cpu_frames.push(s.positions.clone());
@@ -108,7 +119,12 @@ fn trajectory_parity(integrator: u32) {
     // N substeps they would reach N·9e-8 m. Allow that linear bound.
     let bound = steps * 9e-8;
     eprintln!("integrator {integrator}: max deviation {:.3e} m at frame {} (bound {bound:.3e} m over {steps} substeps)", worst.0, worst.1);
-    assert!(worst.0 <= bound, "deviation {} m at frame {} exceeds {bound} m", worst.0, worst.1);
+    assert!(
+        worst.0 <= bound,
+        "deviation {} m at frame {} exceeds {bound} m",
+        worst.0,
+        worst.1
+    );
 }
 
 #[test]

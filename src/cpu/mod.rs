@@ -43,7 +43,9 @@ impl CpuSolver {
             pos: model.packed_positions(),
             vel: model.packed_velocities(),
             force: vec![Vec4::ZERO; n],
-            springs: plan.contains(Pass::SpringForces).then(|| model.spring_csr()),
+            springs: plan
+                .contains(Pass::SpringForces)
+                .then(|| model.spring_csr()),
             hinges: plan
                 .contains(Pass::BendingForces)
                 .then(|| (model.hinges.clone(), model.hinge_csr())),
@@ -63,15 +65,38 @@ impl CpuSolver {
         let p = &self.params;
         match pass {
             Pass::SpringForces => {
-                let csr = self.springs.as_ref().expect("spring_forces is not in the plan");
-                spring_forces(p, &self.pos, &self.vel, &mut self.force, &csr.offsets, &csr.items);
+                let csr = self
+                    .springs
+                    .as_ref()
+                    .expect("spring_forces is not in the plan");
+                spring_forces(
+                    p,
+                    &self.pos,
+                    &self.vel,
+                    &mut self.force,
+                    &csr.offsets,
+                    &csr.items,
+                );
             }
             Pass::BendingForces => {
-                let (hinges, csr) = self.hinges.as_ref().expect("bending_forces is not in the plan");
-                bending_forces(p, &self.pos, &mut self.force, &csr.offsets, &csr.items, hinges);
+                let (hinges, csr) = self
+                    .hinges
+                    .as_ref()
+                    .expect("bending_forces is not in the plan");
+                bending_forces(
+                    p,
+                    &self.pos,
+                    &mut self.force,
+                    &csr.offsets,
+                    &csr.items,
+                    hinges,
+                );
             }
             Pass::WindForces => {
-                let (tris, csr) = self.triangles.as_ref().expect("wind_forces is not in the plan");
+                let (tris, csr) = self
+                    .triangles
+                    .as_ref()
+                    .expect("wind_forces is not in the plan");
                 wind_forces(
                     p,
                     step,

@@ -52,7 +52,8 @@ impl GpuContext {
         let adapter = match &choice {
             AdapterChoice::Named(name) => {
                 let wanted = name.to_lowercase();
-                let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+                let adapters =
+                    pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
                 let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
                 adapters
                     .into_iter()
@@ -73,7 +74,11 @@ impl GpuContext {
                     Error::Gpu(format!(
                         "no {} adapter: {e}. On Debian/Ubuntu the software adapter comes with \
                          `apt-get install -y mesa-vulkan-drivers libvulkan1`",
-                        if choice == AdapterChoice::Fallback { "fallback" } else { "GPU" }
+                        if choice == AdapterChoice::Fallback {
+                            "fallback"
+                        } else {
+                            "GPU"
+                        }
                     ))
                 })?
             }
@@ -83,7 +88,9 @@ impl GpuContext {
         if available.max_storage_buffers_per_shader_stage < STORAGE_BUFFERS_PER_STAGE {
             return Err(Error::Gpu(format!(
                 "adapter {:?} allows {} storage buffers per stage; drapekit needs {}",
-                info.name, available.max_storage_buffers_per_shader_stage, STORAGE_BUFFERS_PER_STAGE
+                info.name,
+                available.max_storage_buffers_per_shader_stage,
+                STORAGE_BUFFERS_PER_STAGE
             )));
         }
         let required_limits = wgpu::Limits {

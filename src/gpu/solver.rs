@@ -50,15 +50,21 @@ pub struct GpuSolver {
     groups: (u32, u32),
 }
 
-fn storage_init(ctx: &GpuContext, label: &'static str, bytes: &[u8], extra: wgpu::BufferUsages) -> wgpu::Buffer {
+fn storage_init(
+    ctx: &GpuContext,
+    label: &'static str,
+    bytes: &[u8],
+    extra: wgpu::BufferUsages,
+) -> wgpu::Buffer {
     // A binding may not be empty; a 16-byte minimum keeps zero-length lists legal.
     let mut data = bytes.to_vec();
     data.resize(data.len().max(16), 0);
-    ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: &data,
-        usage: wgpu::BufferUsages::STORAGE | extra,
-    })
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: &data,
+            usage: wgpu::BufferUsages::STORAGE | extra,
+        })
 }
 
 impl GpuSolver {
@@ -74,13 +80,25 @@ impl GpuSolver {
         let n = model.len() as u32;
         let copy = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         let mut labels = vec!["params", "positions", "velocities", "forces", "staging"];
-        let params_buf = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let pos = storage_init(ctx, "positions", bytemuck::cast_slice(&model.packed_positions()), copy);
-        let vel = storage_init(ctx, "velocities", bytemuck::cast_slice(&model.packed_velocities()), copy);
+        let params_buf = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("params"),
+                contents: bytemuck::bytes_of(&params),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        let pos = storage_init(
+            ctx,
+            "positions",
+            bytemuck::cast_slice(&model.packed_positions()),
+            copy,
+        );
+        let vel = storage_init(
+            ctx,
+            "velocities",
+            bytemuck::cast_slice(&model.packed_velocities()),
+            copy,
+        );
         let force = storage_init(ctx, "forces", &vec![0u8; 16 * n as usize], copy);
         let state_bytes = 16 * n as u64;
         let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -164,7 +182,10 @@ impl GpuSolver {
                 ],
                 Pass::WindForces => vec![
                     (Access::Uniform, &params_buf),
-                    (Access::SubstepUniform, substep_buf.expect("wind needs substep params")),
+                    (
+                        Access::SubstepUniform,
+                        substep_buf.expect("wind needs substep params"),
+                    ),
                     (Access::Read, &pos),
                     (Access::Read, &vel),
                     (Access::ReadWrite, &force),
@@ -235,11 +256,10 @@ impl GpuSolver {
                 });
                 for k in 0..batch.len() {
                     for &pass in passes {
-                        let stage = self
-                            .stages
-                            .iter()
-                            .find(|s| s.pass == pass)
-                            .ok_or_else(|| Error::Gpu(format!("{} is not in the plan", pass.name())))?;
+                        let stage =
+                            self.stages.iter().find(|s| s.pass == pass).ok_or_else(|| {
+                                Error::Gpu(format!("{} is not in the plan", pass.name()))
+                            })?;
                         cpass.set_pipeline(&stage.pipeline);
                         let offset = match (&self.substeps, stage.uses_substep) {
                             (Some(sb), true) => vec![(k as u64 * sb.stride) as u32],
@@ -339,7 +359,11 @@ fn build_stage(ctx: &GpuContext, pass: Pass, bindings: &[(Access, &wgpu::Buffer)
                 buffer,
                 offset: 0,
                 // The dynamic binding covers one entry; the offset selects which.
-                size: if matches!(access, Access::SubstepUniform) { substep_size } else { None },
+                size: if matches!(access, Access::SubstepUniform) {
+                    substep_size
+                } else {
+                    None
+                },
             }),
         })
         .collect();
@@ -369,7 +393,9 @@ fn build_stage(ctx: &GpuContext, pass: Pass, bindings: &[(Access, &wgpu::Buffer)
         pass,
         pipeline,
         bind_group,
-        uses_substep: bindings.iter().any(|(a, _)| matches!(a, Access::SubstepUniform)),
+        uses_substep: bindings
+            .iter()
+            .any(|(a, _)| matches!(a, Access::SubstepUniform)),
     }
 }
 

@@ -21,7 +21,9 @@ pub fn gpu() -> Option<&'static GpuContext> {
     match ctx {
         Ok(ctx) => Some(ctx),
         Err(e) => {
-            let ci = std::env::var("CI").map(|v| v == "true" || v == "1").unwrap_or(false);
+            let ci = std::env::var("CI")
+                .map(|v| v == "true" || v == "1")
+                .unwrap_or(false);
             assert!(
                 !ci,
                 "CI=true but no fallback GPU adapter: {e}\n\
@@ -64,9 +66,18 @@ pub fn perturbed(state: &ParticleState, seed: u64, dx: f32, dv: f32) -> Particle
         .velocities
         .iter()
         .zip(&state.positions)
-        .map(|(_, p)| if p.w == 0.0 { Vec4::ZERO } else { rng.vec3(dv).extend(0.0) })
+        .map(|(_, p)| {
+            if p.w == 0.0 {
+                Vec4::ZERO
+            } else {
+                rng.vec3(dv).extend(0.0)
+            }
+        })
         .collect();
-    ParticleState { positions, velocities }
+    ParticleState {
+        positions,
+        velocities,
+    }
 }
 
 /// Largest component-wise |a − b| over two vec4 lists (xyz only).
@@ -84,5 +95,7 @@ pub fn max_norm(a: &[Vec4]) -> f32 {
 
 /// Path of a shipped fixture.
 pub fn fixture(rel: &str) -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures").join(rel)
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join(rel)
 }

@@ -1,0 +1,60 @@
+//! The bad-input corpus in fixtures/bad/: every file makes `drapekit run` exit with code 2, a
+//! message naming the file, the key (with its line where the format has one) and a fix, no
+//! panic, and no output folder.
+
+mod common;
+
+use std::process::Command;
+
+#[test]
+fn every_bad_scene_is_refused_cleanly() {
+    let dir = common::fixture("bad");
+    let mut checked = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().and_then(|e| e.to_str()) != Some("toml") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).unwrap();
+        let expect = text
+            .lines()
+            .next()
+            .and_then(|l| l.strip_prefix("# expect: "))
+            .unwrap_or_else(|| panic!("{} lacks its '# expect: ' line", path.display()));
+        let out = tempdir(&path);
+        let result = Command::new(env!("CARGO_BIN_EXE_drapekit"))
+            .args([
+                "run",
+                path.to_str().unwrap(),
+                "--backend",
+                "cpu",
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        let name = path.file_name().unwrap().to_str().unwrap();
+        assert_eq!(
+            result.status.code(),
+            Some(2),
+            "{name}: exit code; stderr:\n{stderr}"
+        );
+        assert!(
+            stderr.contains(expect),
+            "{name}: expected {expect:?} in:\n{stderr}"
+        );
+        assert!(stderr.contains("fix:"), "{name}: no fix in:\n{stderr}");
+        assert!(!stderr.contains("panicked"), "{name}: panicked:\n{stderr}");
+        assert!(!out.exists(), "{name}: wrote {}", out.display());
+        checked += 1;
+    }
+    assert!(checked >= 13, "only {checked} bad scenes found");
+}
+
+fn tempdir(scene: &std::path::Path) -> std::path::PathBuf {
+    let stem = scene.file_stem().unwrap().to_str().unwrap();
+    let dir = std::env::temp_dir().join(format!("drapekit-bad-{}-{stem}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}

@@ -1,0 +1,185 @@
+//! The command line end to end: summary fields, the plan, effects on demand, the NaN guard.
+
+mod common;
+
+use drapekit::gpu::GpuSolver;
+use drapekit::plan::Pass;
+use drapekit::scene::Scene;
+use drapekit::sim::prepare;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn drapekit(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .args(args)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .unwrap()
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("drapekit-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+#[test]
+fn run_writes_frames_and_a_complete_summary() {
+    let out = out_dir("run");
+    let scene = common::fixture("scenes/hanging_cloth.toml");
+    let r = drapekit(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--frames",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    for key in [
+        "backend",
+        "adapter",
+        "particles",
+        "triangles",
+        "frames",
+        "substeps_per_frame",
+        "dt",
+        "integrator",
+        "simulated_seconds",
+        "wall_seconds",
+        "particle_substeps_per_second",
+        "passes",
+        "max_edge_strain",
+        "kinetic_energy_j",
+        "finite",
+        "outputs",
+    ] {
+        assert!(summary.get(key).is_some(), "summary lacks {key}");
+    }
+    assert_eq!(summary["backend"], "cpu");
+    assert_eq!(summary["particles"], 32 * 32);
+    assert_eq!(summary["frames"], 3);
+    assert_eq!(summary["finite"], true);
+    assert_eq!(
+        summary["passes"],
+        serde_json::json!(["spring_forces", "bending_forces", "integrate"])
+    );
+    // Frames 0..=3 plus the summary, and each listed file exists.
+    let outputs = summary["outputs"].as_array().unwrap();
+    assert_eq!(outputs.len(), 5);
+    for f in outputs {
+        assert!(out.join(f.as_str().unwrap()).is_file(), "{f} missing");
+    }
+    // No temporary files are left behind by the atomic writes.
+    assert!(std::fs::read_dir(&out).unwrap().all(|e| !e
+        .unwrap()
+        .file_name()
+        .to_string_lossy()
+        .ends_with(".tmp")));
+}
+
+#[test]
+fn plan_json_lists_the_stages() {
+    let scene = common::fixture("scenes/flag_wind.toml");
+    let r = drapekit(&["plan", scene.to_str().unwrap(), "--json"]);
+    assert!(r.status.success());
+    let plan: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    assert_eq!(
+        plan["passes"],
+        serde_json::json!([
+            "spring_forces",
+            "bending_forces",
+            "wind_forces",
+            "integrate"
+        ])
+    );
+    let scene = common::fixture("scenes/free_fall.toml");
+    let plan: serde_json::Value =
+        serde_json::from_slice(&drapekit(&["plan", scene.to_str().unwrap(), "--json"]).stdout)
+            .unwrap();
+    // free_fall has no bending key, no wind and no pins.
+    assert_eq!(
+        plan["passes"],
+        serde_json::json!(["spring_forces", "integrate"])
+    );
+}
+
+#[test]
+fn a_scene_without_wind_builds_no_wind_pipeline_or_buffer() {
+    let Some(ctx) = common::gpu() else { return };
+    let hanging =
+        prepare(&Scene::load(&common::fixture("scenes/hanging_cloth.toml")).unwrap()).unwrap();
+    let solver = GpuSolver::new(ctx, &hanging.model, hanging.params, &hanging.plan, 4).unwrap();
+    assert!(!solver.pipeline_passes().contains(&Pass::WindForces));
+    for label in [
+        "triangles",
+        "triangle_offsets",
+        "triangle_refs",
+        "substep_params",
+    ] {
+        assert!(
+            !solver.buffer_labels().contains(&label),
+            "no-wind scene created buffer {label}"
+        );
+    }
+    // The control: the flag scene does build them, so the assertion above can fail.
+    let flag = prepare(&Scene::load(&common::fixture("scenes/flag_wind.toml")).unwrap()).unwrap();
+    let solver = GpuSolver::new(ctx, &flag.model, flag.params, &flag.plan, 4).unwrap();
+    assert!(solver.pipeline_passes().contains(&Pass::WindForces));
+    assert!(solver.buffer_labels().contains(&"triangles"));
+}
+
+#[test]
+fn a_non_finite_frame_stops_the_run_and_is_not_written() {
+    // The hanging cloth with 1 substep per frame is ~200× past its stable step and blows up.
+    let src = std::fs::read_to_string(common::fixture("scenes/hanging_cloth.toml"))
+        .unwrap()
+        .replace("substeps = \"auto\"", "substeps = 1");
+    let dir = out_dir("nan");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("unstable.toml");
+    std::fs::write(&scene, src).unwrap();
+    let out = dir.join("out");
+    let r = drapekit(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(3), "{stderr}");
+    assert!(
+        stderr.contains("non-finite") && stderr.contains("particle"),
+        "{stderr}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["finite"], false);
+    let last_good = summary["frames"].as_u64().unwrap();
+    // Every frame up to the last good one is on disk; the bad one is not.
+    for f in 0..=last_good {
+        assert!(out.join(format!("frame_{f:04}.obj")).is_file());
+    }
+    assert!(!out.join(format!("frame_{:04}.obj", last_good + 1)).exists());
+    assert!(frame_is_finite(
+        &out.join(format!("frame_{last_good:04}.obj"))
+    ));
+}
+
+fn frame_is_finite(path: &Path) -> bool {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("v "))
+        .all(|l| {
+            l[2..]
+                .split(' ')
+                .all(|x| x.parse::<f32>().map(f32::is_finite).unwrap_or(false))
+        })
+}
