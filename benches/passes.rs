@@ -1,1 +1,109 @@
-fn main() {}
+//! Criterion benches: each pass and a whole substep, CPU twin vs GPU, at 64², 128² and 256².
+//! Throughput is in particle-substeps. GPU batches are one submission, timed to completion.
+//! `WGPU_ADAPTER_NAME` picks the adapter (default: wgpu's choice, e.g. lavapipe on CI machines).
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use drapekit::bench::{bench_model, bench_steps, cpu_description};
+use drapekit::cpu::CpuSolver;
+use drapekit::gpu::{AdapterChoice, GpuContext, GpuSolver};
+use drapekit::plan::Pass;
+use drapekit::solver::Solver;
+use std::time::{Duration, Instant};
+
+const SIZES: [u32; 3] = [64, 128, 256];
+/// Substeps per timed batch for single passes, and for whole substeps (the README's figure).
+const PASS_BATCH: u32 = 10;
+const SUBSTEP_BATCH: u32 = 100;
+
+fn gpu_context() -> Option<GpuContext> {
+    match GpuContext::new(&AdapterChoice::Auto) {
+        Ok(ctx) => {
+            let a = ctx.report();
+            eprintln!(
+                "GPU adapter: {} (driver {}, {}, {})",
+                a.name, a.driver, a.backend, a.device_type
+            );
+            Some(ctx)
+        }
+        Err(e) => {
+            eprintln!("no GPU adapter ({e}); benchmarking the CPU twin only");
+            None
+        }
+    }
+}
+
+fn per_pass(c: &mut Criterion) {
+    eprintln!("CPU: {}", cpu_description());
+    let ctx = gpu_context();
+    for pass in Pass::ALL.into_iter().filter(|&p| p != Pass::WindForces) {
+        let mut group = c.benchmark_group(pass.name());
+        group
+            .sample_size(10)
+            .measurement_time(Duration::from_secs(3));
+        for n in SIZES {
+            let (model, params, plan) = bench_model(n);
+            let steps = bench_steps(PASS_BATCH, params.dt);
+            group.throughput(Throughput::Elements(model.len() as u64 * PASS_BATCH as u64));
+            let mut cpu = CpuSolver::new(&model, params, &plan);
+            group.bench_function(BenchmarkId::new("cpu", format!("{n}x{n}")), |b| {
+                b.iter(|| {
+                    for s in &steps {
+                        cpu.run_pass(pass, s);
+                    }
+                })
+            });
+            if let Some(ctx) = &ctx {
+                let mut gpu =
+                    GpuSolver::new(ctx, &model, params, &plan, PASS_BATCH as usize).unwrap();
+                group.bench_function(BenchmarkId::new("gpu", format!("{n}x{n}")), |b| {
+                    b.iter_custom(|iters| {
+                        let start = Instant::now();
+                        for _ in 0..iters {
+                            gpu.run_passes(&[pass], &steps).unwrap();
+                            gpu.finish().unwrap();
+                        }
+                        start.elapsed()
+                    })
+                });
+            }
+        }
+        group.finish();
+    }
+}
+
+fn whole_substep(c: &mut Criterion) {
+    let ctx = gpu_context();
+    let mut group = c.benchmark_group("substep");
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(5));
+    for n in SIZES {
+        let (model, params, plan) = bench_model(n);
+        let steps = bench_steps(SUBSTEP_BATCH, params.dt);
+        group.throughput(Throughput::Elements(
+            model.len() as u64 * SUBSTEP_BATCH as u64,
+        ));
+        let mut cpu = CpuSolver::new(&model, params, &plan);
+        group.bench_function(BenchmarkId::new("cpu", format!("{n}x{n}")), |b| {
+            b.iter(|| cpu.advance(&steps).unwrap())
+        });
+        if let Some(ctx) = &ctx {
+            let mut gpu =
+                GpuSolver::new(ctx, &model, params, &plan, SUBSTEP_BATCH as usize).unwrap();
+            group.bench_function(BenchmarkId::new("gpu", format!("{n}x{n}")), |b| {
+                b.iter_custom(|iters| {
+                    let start = Instant::now();
+                    for _ in 0..iters {
+                        gpu.advance(&steps).unwrap();
+                        gpu.finish().unwrap();
+                    }
+                    start.elapsed()
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, per_pass, whole_substep);
+criterion_main!(benches);

@@ -95,8 +95,7 @@ impl TriMesh {
         for model in &models {
             let base = mesh.positions.len() as u32;
             for p in model.mesh.positions.chunks_exact(3) {
-                mesh.positions
-                    .push(Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) * scale);
+                mesh.positions.push(Vec3::new(p[0], p[1], p[2]) * scale);
             }
             for t in model.mesh.indices.chunks_exact(3) {
                 mesh.triangles.push([base + t[0], base + t[1], base + t[2]]);

@@ -815,7 +815,14 @@ impl Scene {
                 scale,
                 offset,
             } => {
-                let mut mesh = TriMesh::load_obj(path, *scale, "cloth.mesh.path")?;
+                let mut mesh = TriMesh::load_obj(path, *scale, "cloth.mesh.path").map_err(|e| {
+                    self.error(
+                        "cloth.mesh",
+                        "path",
+                        format!("{}: {}", path.display(), e.problem),
+                        e.fix,
+                    )
+                })?;
                 for p in &mut mesh.positions {
                     *p += *offset;
                 }

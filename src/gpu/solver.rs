@@ -108,7 +108,7 @@ impl GpuSolver {
             mapped_at_creation: false,
         });
 
-        let needs_substep = plan.passes.iter().any(|&p| p == Pass::WindForces);
+        let needs_substep = plan.contains(Pass::WindForces);
         let substeps = needs_substep.then(|| {
             labels.push("substep_params");
             let align = ctx.device.limits().min_uniform_buffer_offset_alignment as u64;
