@@ -46,7 +46,7 @@ fn hinge_force(h: Hinge, role: u32) -> vec3<f32> {
         case 2u: { u = e_len * a; }
         default: { u = e_len * b; }
     }
-    return -magnitude * u;
+    return magnitude * u;
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)

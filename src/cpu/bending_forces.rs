@@ -36,7 +36,7 @@ pub fn hinge_force(pos: &[Vec4], h: &Hinge, role: u32) -> Vec3 {
         2 => e_len * a,
         _ => e_len * b,
     };
-    -magnitude * u
+    magnitude * u
 }
 
 /// Adds each particle's bending forces to `force`, gathered over its CSR hinge references.
