@@ -3,19 +3,23 @@
 // CPU twin: src/cpu/bending_forces.rs.
 
 @group(0) @binding(0) var<uniform> params: SimParams;
-@group(0) @binding(1) var<storage, read> pos: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read_write> force: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> hinge_offsets: array<u32>;
-@group(0) @binding(4) var<storage, read> hinge_refs: array<u32>;   // hinge index * 4 + role
-@group(0) @binding(5) var<storage, read> hinges: array<Hinge>;
+@group(0) @binding(1) var pos: texture_2d<f32>;
+@group(0) @binding(2) var force_out: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(3) var hinge_offsets: texture_2d<u32>;     // r32uint, N + 1 entries
+@group(0) @binding(4) var hinge_refs: texture_2d<u32>;        // r32uint: hinge index * 4 + role
+@group(0) @binding(5) var hinges: texture_2d<u32>;            // two texels per Hinge
+
+fn position(i: u32) -> vec3<f32> {
+    return textureLoad(pos, texel(i), 0).xyz;
+}
 
 // Force on vertex `role` of hinge h. Roles 0, 1: the shared edge (x3, x4 in the paper);
 // roles 2, 3: the opposite vertices (x1, x2).
 fn hinge_force(h: Hinge, role: u32) -> vec3<f32> {
-    let x3 = pos[h.v.x].xyz;
-    let x4 = pos[h.v.y].xyz;
-    let x1 = pos[h.v.z].xyz;
-    let x2 = pos[h.v.w].xyz;
+    let x3 = position(h.v.x);
+    let x4 = position(h.v.y);
+    let x1 = position(h.v.z);
+    let x2 = position(h.v.w);
     let e = x4 - x3;
     let n1 = cross(x1 - x3, x1 - x4);
     let n2 = cross(x2 - x4, x2 - x3);
@@ -55,10 +59,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if (i >= params.num_particles) {
         return;
     }
+    let first = textureLoad(hinge_offsets, texel(i), 0).x;
+    let end = textureLoad(hinge_offsets, texel(i + 1u), 0).x;
     var f = vec3<f32>(0.0);
-    for (var k = hinge_offsets[i]; k < hinge_offsets[i + 1u]; k = k + 1u) {
-        let r = hinge_refs[k];
-        f = f + hinge_force(hinges[r / 4u], r % 4u);
+    for (var k = first; k < end; k = k + 1u) {
+        let r = textureLoad(hinge_refs, texel(k), 0).x;
+        let h = r / 4u;
+        let hinge = unpack_hinge(textureLoad(hinges, texel(2u * h), 0), textureLoad(hinges, texel(2u * h + 1u), 0));
+        f = f + hinge_force(hinge, r % 4u);
     }
-    force[i] = force[i] + vec4<f32>(f, 0.0);
+    textureStore(force_out, texel(i), vec4<f32>(previous_force(i) + f, 0.0));
 }

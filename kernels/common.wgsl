@@ -3,6 +3,16 @@
 
 const WORKGROUP_SIZE: u32 = 64u;
 
+// Every per-particle and per-element array lives in a 2D texture, TEXELS_PER_ROW texels wide,
+// one 16-byte texel per element (positions, springs, ...) or one 4-byte texel (CSR offsets).
+// Reads are textureLoad, writes textureStore: software rasterisers such as llvmpipe fetch texels
+// as whole vectors, whereas storage-buffer reads go lane by lane and component by component.
+const TEXELS_PER_ROW: u32 = 2048u;
+
+fn texel(i: u32) -> vec2<u32> {
+    return vec2<u32>(i % TEXELS_PER_ROW, i / TEXELS_PER_ROW);
+}
+
 // Values that stay constant for a whole run.
 struct SimParams {
     gravity: vec4<f32>,          // xyz: m/s², w: unused
@@ -27,6 +37,7 @@ struct SubstepParams {
 }
 
 // One incident spring seen from a particle (CSR entry): the spring is stored once per end.
+// Uploaded as one rgba32uint texel, floats as their bits.
 struct SpringRef {
     other: u32,
     rest_length: f32,            // m
@@ -35,12 +46,21 @@ struct SpringRef {
 }
 
 // A dihedral hinge: v.x, v.y are the shared edge, v.z and v.w the opposite vertices.
+// Uploaded as two rgba32uint texels, floats as their bits.
 struct Hinge {
     v: vec4<u32>,
     stiffness: f32,              // N·m
     rest_sin_half: f32,          // sin(θ0 / 2)
     _pad0: u32,
     _pad1: u32,
+}
+
+fn unpack_spring(t: vec4<u32>) -> SpringRef {
+    return SpringRef(t.x, bitcast<f32>(t.y), bitcast<f32>(t.z), bitcast<f32>(t.w));
+}
+
+fn unpack_hinge(a: vec4<u32>, b: vec4<u32>) -> Hinge {
+    return Hinge(a, bitcast<f32>(b.x), bitcast<f32>(b.y), b.z, b.w);
 }
 
 // Flattened particle index for a 2D dispatch (x up to 65535 workgroups).

@@ -1,10 +1,13 @@
-// Euler integration of every free particle; consumes and clears the force accumulator.
+// Euler integration of every free particle. Reads this substep's state and the summed forces,
+// writes the next state into the other texture of each ping-pong pair.
 // pos.w holds the inverse mass: 0 pins the particle. CPU twin: src/cpu/integrate.rs.
 
 @group(0) @binding(0) var<uniform> params: SimParams;
-@group(0) @binding(1) var<storage, read_write> pos: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read_write> vel: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read_write> force: array<vec4<f32>>;
+@group(0) @binding(1) var pos: texture_2d<f32>;
+@group(0) @binding(2) var vel: texture_2d<f32>;
+@group(0) @binding(3) var force: texture_2d<f32>;
+@group(0) @binding(4) var pos_out: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(5) var vel_out: texture_storage_2d<rgba32float, write>;
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -12,15 +15,15 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if (i >= params.num_particles) {
         return;
     }
-    let p = pos[i];
+    let p = textureLoad(pos, texel(i), 0);
     let inv_mass = p.w;
-    let f = force[i].xyz;
-    force[i] = vec4<f32>(0.0);
     if (inv_mass == 0.0) {
-        vel[i] = vec4<f32>(0.0);
+        textureStore(pos_out, texel(i), p);
+        textureStore(vel_out, texel(i), vec4<f32>(0.0));
         return;
     }
-    let v = vel[i].xyz;
+    let f = textureLoad(force, texel(i), 0).xyz;
+    let v = textureLoad(vel, texel(i), 0).xyz;
     let a = f * inv_mass + params.gravity.xyz - params.air_damping * v;
     var x_new = p.xyz;
     var v_new = v;
@@ -33,6 +36,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         v_new = v + params.dt * a;
         x_new = p.xyz + params.dt * v_new;
     }
-    pos[i] = vec4<f32>(x_new, inv_mass);
-    vel[i] = vec4<f32>(v_new, 0.0);
+    textureStore(pos_out, texel(i), vec4<f32>(x_new, inv_mass));
+    textureStore(vel_out, texel(i), vec4<f32>(v_new, 0.0));
 }

@@ -2,11 +2,11 @@
 // end, so no float atomics are needed and the sum order is fixed (CPU twin: src/cpu/spring_forces.rs).
 
 @group(0) @binding(0) var<uniform> params: SimParams;
-@group(0) @binding(1) var<storage, read> pos: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read> vel: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read_write> force: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read> spring_offsets: array<u32>;
-@group(0) @binding(5) var<storage, read> springs: array<SpringRef>;
+@group(0) @binding(1) var pos: texture_2d<f32>;
+@group(0) @binding(2) var vel: texture_2d<f32>;
+@group(0) @binding(3) var force_out: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(4) var spring_offsets: texture_2d<u32>;    // r32uint, N + 1 entries
+@group(0) @binding(5) var springs: texture_2d<u32>;           // one SpringRef per texel
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -14,19 +14,21 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if (i >= params.num_particles) {
         return;
     }
-    let xi = pos[i].xyz;
-    let vi = vel[i].xyz;
+    let xi = textureLoad(pos, texel(i), 0).xyz;
+    let vi = textureLoad(vel, texel(i), 0).xyz;
+    let first = textureLoad(spring_offsets, texel(i), 0).x;
+    let end = textureLoad(spring_offsets, texel(i + 1u), 0).x;
     var f = vec3<f32>(0.0);
-    for (var k = spring_offsets[i]; k < spring_offsets[i + 1u]; k = k + 1u) {
-        let s = springs[k];
-        let d = pos[s.other].xyz - xi;
+    for (var k = first; k < end; k = k + 1u) {
+        let s = unpack_spring(textureLoad(springs, texel(k), 0));
+        let d = textureLoad(pos, texel(s.other), 0).xyz - xi;
         let len = length(d);
         if (len > 1e-12) {
             let dir = d / len;
             let stretch = len - s.rest_length;
-            let closing_speed = dot(vel[s.other].xyz - vi, dir);
+            let closing_speed = dot(textureLoad(vel, texel(s.other), 0).xyz - vi, dir);
             f = f + (s.stiffness * stretch + s.damping * closing_speed) * dir;
         }
     }
-    force[i] = force[i] + vec4<f32>(f, 0.0);
+    textureStore(force_out, texel(i), vec4<f32>(previous_force(i) + f, 0.0));
 }

@@ -37,6 +37,11 @@ impl Pass {
         }
     }
 
+    /// Whether the stage adds forces (all but `integrate`).
+    pub fn is_force(self) -> bool {
+        self != Pass::Integrate
+    }
+
     /// The stage's WGSL source, without `common.wgsl`.
     pub fn kernel_source(self) -> &'static str {
         match self {

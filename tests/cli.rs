@@ -122,7 +122,7 @@ fn a_scene_without_wind_builds_no_wind_pipeline_or_buffer() {
         "substep_params",
     ] {
         assert!(
-            !solver.buffer_labels().contains(&label),
+            !solver.resource_labels().contains(&label),
             "no-wind scene created buffer {label}"
         );
     }
@@ -130,7 +130,7 @@ fn a_scene_without_wind_builds_no_wind_pipeline_or_buffer() {
     let flag = prepare(&Scene::load(&common::fixture("scenes/flag_wind.toml")).unwrap()).unwrap();
     let solver = GpuSolver::new(ctx, &flag.model, flag.params, &flag.plan, 4).unwrap();
     assert!(solver.pipeline_passes().contains(&Pass::WindForces));
-    assert!(solver.buffer_labels().contains(&"triangles"));
+    assert!(solver.resource_labels().contains(&"triangles"));
 }
 
 #[test]

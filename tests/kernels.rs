@@ -2,15 +2,18 @@
 
 mod common;
 
-use drapekit::gpu::kernels::{compose, validate_wgsl, COMMON_WGSL};
+use drapekit::gpu::kernels::{compose, validate_wgsl, ForceInput, COMMON_WGSL};
 use drapekit::plan::Pass;
 
 #[test]
 fn naga_validates_every_kernel() {
+    // Force stages come in two variants: first of the substep, or reading the previous sum.
     for pass in Pass::ALL {
-        let label = format!("kernels/{}.wgsl", pass.name());
-        if let Err(report) = validate_wgsl(&label, &compose(pass)) {
-            panic!("{report}");
+        for input in ForceInput::ALL {
+            let label = format!("kernels/{}.wgsl ({input:?})", pass.name());
+            if let Err(report) = validate_wgsl(&label, &compose(pass, input)) {
+                panic!("{report}");
+            }
         }
     }
 }

@@ -3,7 +3,9 @@
 use crate::gpu::layout::{SimParams, INTEGRATOR_EXPLICIT};
 use glam::Vec4;
 
-/// Advances every free particle by one Euler step and clears the force accumulator.
+/// Advances every free particle by one Euler step and clears the force accumulator. (The kernel
+/// writes the next state to the other texture of a ping-pong pair and needs no clearing: the
+/// first force stage of the next substep overwrites its forces. The arithmetic is the same.)
 pub fn integrate(params: &SimParams, pos: &mut [Vec4], vel: &mut [Vec4], force: &mut [Vec4]) {
     let gravity = Vec4::from(params.gravity).truncate();
     for i in 0..params.num_particles as usize {

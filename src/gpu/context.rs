@@ -26,9 +26,6 @@ impl FromStr for AdapterChoice {
     }
 }
 
-/// Storage buffers one stage binds at most (wind_forces: 6); requested from the adapter.
-const STORAGE_BUFFERS_PER_STAGE: u32 = 8;
-
 /// A device and queue on a chosen adapter. Cheap to clone (wgpu handles are shared).
 #[derive(Clone, Debug)]
 pub struct GpuContext {
@@ -85,18 +82,10 @@ impl GpuContext {
         };
         let info = adapter.get_info();
         let available = adapter.limits();
-        if available.max_storage_buffers_per_shader_stage < STORAGE_BUFFERS_PER_STAGE {
-            return Err(Error::Gpu(format!(
-                "adapter {:?} allows {} storage buffers per stage; drapekit needs {}",
-                info.name,
-                available.max_storage_buffers_per_shader_stage,
-                STORAGE_BUFFERS_PER_STAGE
-            )));
-        }
+        // Kernels bind only uniforms, sampled textures and write-only storage textures, all
+        // within the downlevel defaults; larger textures let larger meshes fit (see texels.rs).
         let required_limits = wgpu::Limits {
-            max_storage_buffers_per_shader_stage: STORAGE_BUFFERS_PER_STAGE,
-            max_storage_buffer_binding_size: available.max_storage_buffer_binding_size,
-            max_buffer_size: available.max_buffer_size,
+            max_texture_dimension_2d: available.max_texture_dimension_2d,
             ..wgpu::Limits::downlevel_defaults()
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {

@@ -77,5 +77,7 @@ pub struct Hinge {
 pub const INTEGRATOR_EXPLICIT: u32 = 0;
 /// Semi-implicit (symplectic) Euler.
 pub const INTEGRATOR_SYMPLECTIC: u32 = 1;
+/// Width in texels of every data texture, as `TEXELS_PER_ROW` in common.wgsl.
+pub const TEXELS_PER_ROW: u32 = 2048;
 /// Threads per workgroup, as `WORKGROUP_SIZE` in common.wgsl.
 pub const WORKGROUP_SIZE: u32 = 64;

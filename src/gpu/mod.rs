@@ -4,6 +4,7 @@ mod context;
 pub mod kernels;
 pub mod layout;
 mod solver;
+mod texels;
 
 pub use context::{AdapterChoice, GpuContext};
 pub use solver::GpuSolver;

@@ -1,9 +1,15 @@
 //! The GPU backend: one compute pipeline per planned stage, all substeps of a batch encoded
 //! into one submission, readback through a MAP_READ staging buffer only when asked.
+//!
+//! Every array is a [`TexelArray`]. Positions and velocities ping-pong between two textures
+//! (integrate reads one pair and writes the other), so each stage has one bind group per
+//! parity. Force stages chain through at most two force textures: stage j writes `forces[j % 2]`
+//! and reads `forces[(j + 1) % 2]`, except the first, which starts from zero.
 
 use super::context::GpuContext;
-use super::kernels::compose;
+use super::kernels::{compose, ForceInput};
 use super::layout::{SimParams, SubstepParams, WORKGROUP_SIZE};
+use super::texels::TexelArray;
 use crate::error::Error;
 use crate::model::ClothModel;
 use crate::plan::{Pass, PassPlan};
@@ -11,21 +17,29 @@ use crate::solver::{AdapterReport, ParticleState, Solver};
 use glam::Vec4;
 use std::num::NonZeroU64;
 use wgpu::util::DeviceExt;
+use wgpu::TextureFormat::{R32Uint, Rgba32Float, Rgba32Uint};
 
-/// How a stage uses a buffer; the layout entry and the bind group entry come from the same list.
+/// One binding of a stage; the layout entry and the bind group entry come from the same value.
 #[derive(Clone, Copy)]
-enum Access {
-    Uniform,
+enum Binding<'a> {
+    Uniform(&'a wgpu::Buffer),
     /// One `SubstepParams` at a dynamic offset.
-    SubstepUniform,
-    Read,
-    ReadWrite,
+    SubstepUniform(&'a wgpu::Buffer),
+    /// Read with textureLoad.
+    Read(&'a TexelArray),
+    /// Written with textureStore.
+    Write(&'a TexelArray),
 }
 
 struct Stage {
     pass: Pass,
     pipeline: wgpu::ComputePipeline,
-    bind_group: wgpu::BindGroup,
+    /// Indexed by which state texture pair is current.
+    bind_groups: [wgpu::BindGroup; 2],
+    /// Group 1: the force texture of the previous force stage.
+    force_in: Option<wgpu::BindGroup>,
+    /// The force texture this stage writes.
+    force_out: Option<usize>,
     uses_substep: bool,
 }
 
@@ -36,35 +50,22 @@ struct SubstepBuffer {
     capacity: usize,
 }
 
-/// The wgpu backend. Creates buffers and pipelines only for the stages in its plan.
+/// The wgpu backend. Creates textures, buffers and pipelines only for the stages in its plan.
 pub struct GpuSolver {
     ctx: GpuContext,
-    n: u32,
-    pos: wgpu::Buffer,
-    vel: wgpu::Buffer,
-    force: wgpu::Buffer,
+    pos: [TexelArray; 2],
+    vel: [TexelArray; 2],
+    forces: Vec<TexelArray>,
+    /// Which of `pos`/`vel` holds the current state.
+    current: usize,
+    /// Which of `forces` the last force stage wrote.
+    last_forces: usize,
+    n: usize,
     staging: wgpu::Buffer,
     substeps: Option<SubstepBuffer>,
     stages: Vec<Stage>,
-    buffer_labels: Vec<&'static str>,
+    resource_labels: Vec<&'static str>,
     groups: (u32, u32),
-}
-
-fn storage_init(
-    ctx: &GpuContext,
-    label: &'static str,
-    bytes: &[u8],
-    extra: wgpu::BufferUsages,
-) -> wgpu::Buffer {
-    // A binding may not be empty; a 16-byte minimum keeps zero-length lists legal.
-    let mut data = bytes.to_vec();
-    data.resize(data.len().max(16), 0);
-    ctx.device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: &data,
-            usage: wgpu::BufferUsages::STORAGE | extra,
-        })
 }
 
 impl GpuSolver {
@@ -77,8 +78,8 @@ impl GpuSolver {
         plan: &PassPlan,
         max_batch: usize,
     ) -> Result<Self, Error> {
-        let n = model.len() as u32;
-        let copy = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+        let n = model.len();
+        let state_usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC;
         let mut labels = vec!["params", "positions", "velocities", "forces", "staging"];
         let params_buf = ctx
             .device
@@ -87,23 +88,22 @@ impl GpuSolver {
                 contents: bytemuck::bytes_of(&params),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
-        let pos = storage_init(
-            ctx,
-            "positions",
-            bytemuck::cast_slice(&model.packed_positions()),
-            copy,
-        );
-        let vel = storage_init(
-            ctx,
-            "velocities",
-            bytemuck::cast_slice(&model.packed_velocities()),
-            copy,
-        );
-        let force = storage_init(ctx, "forces", &vec![0u8; 16 * n as usize], copy);
-        let state_bytes = 16 * n as u64;
+        let state = |label: &str, data: &[Vec4]| -> Result<[TexelArray; 2], Error> {
+            let bytes = bytemuck::cast_slice(data);
+            Ok([
+                TexelArray::with_data(ctx, label, Rgba32Float, bytes, state_usage)?,
+                TexelArray::with_data(ctx, label, Rgba32Float, bytes, state_usage)?,
+            ])
+        };
+        let pos = state("positions", &model.packed_positions())?;
+        let vel = state("velocities", &model.packed_velocities())?;
+        let force_stages = plan.passes.iter().filter(|p| p.is_force()).count();
+        let forces = (0..force_stages.clamp(1, 2))
+            .map(|_| TexelArray::new(ctx, "forces", Rgba32Float, n, state_usage))
+            .collect::<Result<Vec<_>, _>>()?;
         let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("staging"),
-            size: (2 * state_bytes).max(16),
+            size: 2 * pos[0].padded_bytes(),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -127,83 +127,112 @@ impl GpuSolver {
         });
 
         let mut stages = Vec::new();
+        let mut force_index = 0;
         for &pass in &plan.passes {
-            // Stage-specific buffers live only as long as the bind group that holds them.
-            let mut owned: Vec<wgpu::Buffer> = Vec::new();
-            let mut add = |label: &'static str, bytes: &[u8]| {
+            // Stage-specific arrays live as long as the bind groups that hold them.
+            let mut owned: Vec<TexelArray> = Vec::new();
+            let mut add = |label: &'static str, format, bytes: &[u8]| -> Result<(), Error> {
                 labels.push(label);
-                owned.push(storage_init(ctx, label, bytes, wgpu::BufferUsages::empty()));
-                owned.len() - 1
+                let none = wgpu::TextureUsages::empty();
+                owned.push(TexelArray::with_data(ctx, label, format, bytes, none)?);
+                Ok(())
             };
-            let extra: Vec<usize> = match pass {
+            match pass {
                 Pass::SpringForces => {
                     let csr = model.spring_csr();
-                    vec![
-                        add("spring_offsets", bytemuck::cast_slice(&csr.offsets)),
-                        add("springs", bytemuck::cast_slice(&csr.items)),
-                    ]
+                    add(
+                        "spring_offsets",
+                        R32Uint,
+                        bytemuck::cast_slice(&csr.offsets),
+                    )?;
+                    add("springs", Rgba32Uint, bytemuck::cast_slice(&csr.items))?;
                 }
                 Pass::BendingForces => {
                     let csr = model.hinge_csr();
-                    vec![
-                        add("hinge_offsets", bytemuck::cast_slice(&csr.offsets)),
-                        add("hinge_refs", bytemuck::cast_slice(&csr.items)),
-                        add("hinges", bytemuck::cast_slice(&model.hinges)),
-                    ]
+                    add("hinge_offsets", R32Uint, bytemuck::cast_slice(&csr.offsets))?;
+                    add("hinge_refs", R32Uint, bytemuck::cast_slice(&csr.items))?;
+                    add("hinges", Rgba32Uint, bytemuck::cast_slice(&model.hinges))?;
                 }
                 Pass::WindForces => {
                     let csr = model.triangle_csr();
-                    vec![
-                        add("triangle_offsets", bytemuck::cast_slice(&csr.offsets)),
-                        add("triangle_refs", bytemuck::cast_slice(&csr.items)),
-                        add("triangles", bytemuck::cast_slice(&model.packed_triangles())),
-                    ]
+                    add(
+                        "triangle_offsets",
+                        R32Uint,
+                        bytemuck::cast_slice(&csr.offsets),
+                    )?;
+                    add("triangle_refs", R32Uint, bytemuck::cast_slice(&csr.items))?;
+                    let tris = model.packed_triangles();
+                    add("triangles", Rgba32Uint, bytemuck::cast_slice(&tris))?;
                 }
-                Pass::Integrate => vec![],
+                Pass::Integrate => {}
+            }
+            let (force_out, force_in) = if pass.is_force() {
+                let j = force_index;
+                force_index += 1;
+                (Some(j % 2), (j > 0).then_some((j + 1) % 2))
+            } else {
+                (None, None)
             };
-            let o = |k: usize| &owned[extra[k]];
+            // The forces integrate reads: the last force stage's output (zero if none ran).
+            let summed = (force_stages + 1) % 2 % forces.len();
             let substep_buf = substeps.as_ref().map(|s| &s.buffer);
-            let bindings: Vec<(Access, &wgpu::Buffer)> = match pass {
-                Pass::SpringForces => vec![
-                    (Access::Uniform, &params_buf),
-                    (Access::Read, &pos),
-                    (Access::Read, &vel),
-                    (Access::ReadWrite, &force),
-                    (Access::Read, o(0)),
-                    (Access::Read, o(1)),
-                ],
-                Pass::BendingForces => vec![
-                    (Access::Uniform, &params_buf),
-                    (Access::Read, &pos),
-                    (Access::ReadWrite, &force),
-                    (Access::Read, o(0)),
-                    (Access::Read, o(1)),
-                    (Access::Read, o(2)),
-                ],
-                Pass::WindForces => vec![
-                    (Access::Uniform, &params_buf),
-                    (
-                        Access::SubstepUniform,
-                        substep_buf.expect("wind needs substep params"),
-                    ),
-                    (Access::Read, &pos),
-                    (Access::Read, &vel),
-                    (Access::ReadWrite, &force),
-                    (Access::Read, o(0)),
-                    (Access::Read, o(1)),
-                    (Access::Read, o(2)),
-                ],
-                Pass::Integrate => vec![
-                    (Access::Uniform, &params_buf),
-                    (Access::ReadWrite, &pos),
-                    (Access::ReadWrite, &vel),
-                    (Access::ReadWrite, &force),
-                ],
+            let bindings = |p: usize| -> Vec<Binding> {
+                let o = |k: usize| Binding::Read(&owned[k]);
+                let out = || Binding::Write(&forces[force_out.expect("force stage")]);
+                match pass {
+                    Pass::SpringForces => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Read(&pos[p]),
+                        Binding::Read(&vel[p]),
+                        out(),
+                        o(0),
+                        o(1),
+                    ],
+                    Pass::BendingForces => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Read(&pos[p]),
+                        out(),
+                        o(0),
+                        o(1),
+                        o(2),
+                    ],
+                    Pass::WindForces => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::SubstepUniform(substep_buf.expect("wind needs substep params")),
+                        Binding::Read(&pos[p]),
+                        Binding::Read(&vel[p]),
+                        out(),
+                        o(0),
+                        o(1),
+                        o(2),
+                    ],
+                    Pass::Integrate => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Read(&pos[p]),
+                        Binding::Read(&vel[p]),
+                        Binding::Read(&forces[summed]),
+                        Binding::Write(&pos[1 - p]),
+                        Binding::Write(&vel[1 - p]),
+                    ],
+                }
             };
-            stages.push(build_stage(ctx, pass, &bindings));
+            let input = if force_in.is_some() {
+                ForceInput::Texture
+            } else {
+                ForceInput::Zero
+            };
+            let force_in = force_in.map(|k| [Binding::Read(&forces[k])]);
+            stages.push(build_stage(
+                ctx,
+                pass,
+                input,
+                [&bindings(0), &bindings(1)],
+                force_in.as_ref().map(|b| &b[..]),
+                force_out,
+            ));
         }
 
-        let total_groups = n.div_ceil(WORKGROUP_SIZE).max(1);
+        let total_groups = (n as u32).div_ceil(WORKGROUP_SIZE).max(1);
         let max_x = ctx.device.limits().max_compute_workgroups_per_dimension;
         let groups = if total_groups <= max_x {
             (total_groups, 1)
@@ -212,14 +241,16 @@ impl GpuSolver {
         };
         Ok(GpuSolver {
             ctx: ctx.clone(),
-            n,
             pos,
             vel,
-            force,
+            forces,
+            current: 0,
+            last_forces: 0,
+            n,
             staging,
             substeps,
             stages,
-            buffer_labels: labels,
+            resource_labels: labels,
             groups,
         })
     }
@@ -229,9 +260,9 @@ impl GpuSolver {
         self.stages.iter().map(|s| s.pass).collect()
     }
 
-    /// Labels of every buffer this solver created.
-    pub fn buffer_labels(&self) -> &[&'static str] {
-        &self.buffer_labels
+    /// Labels of every buffer and texture this solver created.
+    pub fn resource_labels(&self) -> &[&'static str] {
+        &self.resource_labels
     }
 
     /// Runs the given stages (each must be in the plan) once per entry of `steps`, in one
@@ -265,8 +296,17 @@ impl GpuSolver {
                             (Some(sb), true) => vec![(k as u64 * sb.stride) as u32],
                             _ => vec![],
                         };
-                        cpass.set_bind_group(0, &stage.bind_group, &offset);
+                        cpass.set_bind_group(0, &stage.bind_groups[self.current], &offset);
+                        if let Some(force_in) = &stage.force_in {
+                            cpass.set_bind_group(1, force_in, &[]);
+                        }
                         cpass.dispatch_workgroups(self.groups.0, self.groups.1, 1);
+                        if let Some(out) = stage.force_out {
+                            self.last_forces = out;
+                        }
+                        if pass == Pass::Integrate {
+                            self.current = 1 - self.current;
+                        }
                     }
                 }
             }
@@ -278,25 +318,27 @@ impl GpuSolver {
     /// Uploads positions and velocities and clears forces.
     pub fn set_state(&mut self, state: &ParticleState) {
         let q = &self.ctx.queue;
-        q.write_buffer(&self.pos, 0, bytemuck::cast_slice(&state.positions));
-        q.write_buffer(&self.vel, 0, bytemuck::cast_slice(&state.velocities));
-        q.write_buffer(&self.force, 0, &vec![0u8; 16 * self.n as usize]);
+        self.pos[self.current].write(q, bytemuck::cast_slice(&state.positions));
+        self.vel[self.current].write(q, bytemuck::cast_slice(&state.velocities));
+        for f in &self.forces {
+            f.write(q, &[]);
+        }
     }
 
-    /// Reads the force accumulator back (for per-stage parity tests).
+    /// Reads back the forces the last force stage wrote (for per-stage parity tests).
     pub fn forces(&mut self) -> Result<Vec<Vec4>, Error> {
-        Ok(self.read_back(&[&self.force])?.remove(0))
+        Ok(self.read_back(&[&self.forces[self.last_forces]])?.remove(0))
     }
 
-    fn read_back(&self, buffers: &[&wgpu::Buffer]) -> Result<Vec<Vec<Vec4>>, Error> {
-        let bytes = 16 * self.n as u64;
+    fn read_back(&self, arrays: &[&TexelArray]) -> Result<Vec<Vec<Vec4>>, Error> {
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        for (k, b) in buffers.iter().enumerate() {
-            encoder.copy_buffer_to_buffer(b, 0, &self.staging, k as u64 * bytes, bytes);
+        let mut at = 0;
+        for a in arrays {
+            a.copy_to_buffer(&mut encoder, &self.staging, at);
+            at += a.padded_bytes();
         }
         self.ctx.queue.submit([encoder.finish()]);
-        let total = bytes * buffers.len() as u64;
-        let slice = self.staging.slice(..total);
+        let slice = self.staging.slice(..at);
         let (tx, rx) = std::sync::mpsc::channel();
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
@@ -313,73 +355,115 @@ impl GpuSolver {
                 .get_mapped_range()
                 .map_err(|e| Error::Gpu(format!("reading the staging buffer failed: {e}")))?;
             let all: &[Vec4] = bytemuck::cast_slice(&view);
-            all.chunks(self.n as usize).map(|c| c.to_vec()).collect()
+            let mut start = 0;
+            arrays
+                .iter()
+                .map(|a| {
+                    let texels = a.padded_bytes() as usize / 16;
+                    let data = all[start..start + self.n].to_vec();
+                    start += texels;
+                    data
+                })
+                .collect()
         };
         self.staging.unmap();
         Ok(out)
     }
 }
 
-fn build_stage(ctx: &GpuContext, pass: Pass, bindings: &[(Access, &wgpu::Buffer)]) -> Stage {
-    let device = &ctx.device;
+fn layout_entry(binding: u32, b: &Binding) -> wgpu::BindGroupLayoutEntry {
     let substep_size = NonZeroU64::new(std::mem::size_of::<SubstepParams>() as u64);
-    let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = bindings
-        .iter()
-        .enumerate()
-        .map(|(i, (access, _))| {
-            let ty = match access {
-                Access::Uniform => wgpu::BufferBindingType::Uniform,
-                Access::SubstepUniform => wgpu::BufferBindingType::Uniform,
-                Access::Read => wgpu::BufferBindingType::Storage { read_only: true },
-                Access::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
-            };
-            let dynamic = matches!(access, Access::SubstepUniform);
-            wgpu::BindGroupLayoutEntry {
-                binding: i as u32,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty,
-                    has_dynamic_offset: dynamic,
-                    min_binding_size: if dynamic { substep_size } else { None },
-                },
-                count: None,
+    let ty = match b {
+        Binding::Uniform(_) | Binding::SubstepUniform(_) => {
+            let dynamic = matches!(b, Binding::SubstepUniform(_));
+            wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: dynamic,
+                min_binding_size: if dynamic { substep_size } else { None },
             }
-        })
+        }
+        Binding::Read(t) => wgpu::BindingType::Texture {
+            sample_type: t.sample_type(),
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        Binding::Write(t) => wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::WriteOnly,
+            format: t.format,
+            view_dimension: wgpu::TextureViewDimension::D2,
+        },
+    };
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty,
+        count: None,
+    }
+}
+
+fn group_entry<'a>(binding: u32, b: &Binding<'a>) -> wgpu::BindGroupEntry<'a> {
+    let resource = match *b {
+        Binding::Uniform(buffer) => buffer.as_entire_binding(),
+        // The dynamic binding covers one entry; the offset selects which.
+        Binding::SubstepUniform(buffer) => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer,
+            offset: 0,
+            size: NonZeroU64::new(std::mem::size_of::<SubstepParams>() as u64),
+        }),
+        Binding::Read(t) | Binding::Write(t) => wgpu::BindingResource::TextureView(&t.view),
+    };
+    wgpu::BindGroupEntry { binding, resource }
+}
+
+/// A layout and one bind group per binding list (all lists have the same shape).
+fn bind_groups<const K: usize>(
+    device: &wgpu::Device,
+    label: &str,
+    lists: [&[Binding]; K],
+) -> (wgpu::BindGroupLayout, [wgpu::BindGroup; K]) {
+    let entries: Vec<_> = (lists[0].iter().enumerate())
+        .map(|(i, b)| layout_entry(i as u32, b))
         .collect();
-    let bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some(pass.name()),
-        entries: &layout_entries,
-    });
-    let entries: Vec<wgpu::BindGroupEntry> = bindings
-        .iter()
-        .enumerate()
-        .map(|(i, (access, buffer))| wgpu::BindGroupEntry {
-            binding: i as u32,
-            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer,
-                offset: 0,
-                // The dynamic binding covers one entry; the offset selects which.
-                size: if matches!(access, Access::SubstepUniform) {
-                    substep_size
-                } else {
-                    None
-                },
-            }),
-        })
-        .collect();
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(pass.name()),
-        layout: &bgl,
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
         entries: &entries,
     });
+    let groups = lists.map(|list| {
+        let entries: Vec<_> = (list.iter().enumerate())
+            .map(|(i, b)| group_entry(i as u32, b))
+            .collect();
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(label),
+            layout: &layout,
+            entries: &entries,
+        })
+    });
+    (layout, groups)
+}
+
+fn build_stage(
+    ctx: &GpuContext,
+    pass: Pass,
+    input: ForceInput,
+    state_bindings: [&[Binding]; 2],
+    force_in: Option<&[Binding]>,
+    force_out: Option<usize>,
+) -> Stage {
+    let device = &ctx.device;
+    let (layout0, groups) = bind_groups(device, pass.name(), state_bindings);
+    let force_in = force_in.map(|b| bind_groups(device, "force_in", [b]));
+    let mut layouts = vec![Some(&layout0)];
+    if let Some((layout1, _)) = &force_in {
+        layouts.push(Some(layout1));
+    }
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(pass.name()),
-        bind_group_layouts: &[Some(&bgl)],
+        bind_group_layouts: &layouts,
         immediate_size: 0,
     });
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(pass.name()),
-        source: wgpu::ShaderSource::Wgsl(compose(pass).into()),
+        source: wgpu::ShaderSource::Wgsl(compose(pass, input).into()),
     });
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(pass.name()),
@@ -392,10 +476,12 @@ fn build_stage(ctx: &GpuContext, pass: Pass, bindings: &[(Access, &wgpu::Buffer)
     Stage {
         pass,
         pipeline,
-        bind_group,
-        uses_substep: bindings
+        bind_groups: groups,
+        force_in: force_in.map(|(_, [g])| g),
+        force_out,
+        uses_substep: state_bindings[0]
             .iter()
-            .any(|(a, _)| matches!(a, Access::SubstepUniform)),
+            .any(|b| matches!(b, Binding::SubstepUniform(_))),
     }
 }
 
@@ -422,7 +508,8 @@ impl Solver for GpuSolver {
     }
 
     fn state(&mut self) -> Result<ParticleState, Error> {
-        let mut out = self.read_back(&[&self.pos, &self.vel])?;
+        let (p, v) = (&self.pos[self.current], &self.vel[self.current]);
+        let mut out = self.read_back(&[p, v])?;
         let velocities = out.pop().unwrap_or_default();
         let positions = out.pop().unwrap_or_default();
         Ok(ParticleState {
