@@ -1,4 +1,5 @@
-//! `drapekit bench`: whole-substep throughput on both backends, as CSV and Markdown tables.
+//! `drapekit bench`: whole-substep throughput on both backends, as CSV and Markdown tables and
+//! an SVG plot.
 //! The criterion benches in `benches/` use the same model builder, so the two agree on what
 //! "a substep at 256²" means.
 
@@ -191,10 +192,13 @@ pub fn run_cli(
     }
     write_atomic(&out.join("bench.csv"), csv.as_bytes())?;
     write_atomic(&out.join("bench.md"), md.as_bytes())?;
+    let title = format!("Whole substep, {substeps} substeps per batch");
+    crate::plot::throughput_svg(&rows, &title, &out.join("bench.svg"))?;
     println!(
-        "wrote {} and {}",
+        "wrote {}, {} and {}",
         out.join("bench.csv").display(),
-        out.join("bench.md").display()
+        out.join("bench.md").display(),
+        out.join("bench.svg").display()
     );
     Ok(())
 }

@@ -14,6 +14,7 @@ pub mod metrics;
 pub mod model;
 pub mod output;
 pub mod plan;
+pub mod plot;
 pub mod run;
 pub mod scene;
 pub mod sim;

@@ -130,7 +130,7 @@ fn execute(command: Command) -> Result<(), Error> {
                 "particles": prep.model.len(),
                 "triangles": prep.model.triangles.len(),
                 "springs": prep.model.springs.len(),
-                "hinges": if prep.plan.contains(drapekit::plan::Pass::BendingForces) { prep.model.hinges.len() } else { 0 },
+                "hinges": prep.hinges_in_use(),
                 "pinned": prep.model.pinned.iter().filter(|p| **p).count(),
                 "substeps_per_frame": prep.substeps,
                 "substeps_source": if prep.auto_substeps { "auto" } else { "scene" },

@@ -123,11 +123,7 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
         particles: prep.model.len(),
         triangles: prep.model.triangles.len(),
         springs: prep.model.springs.len(),
-        hinges: if prep.plan.contains(crate::plan::Pass::BendingForces) {
-            prep.model.hinges.len()
-        } else {
-            0
-        },
+        hinges: prep.hinges_in_use(),
         frames: stats.frames_run,
         frames_requested: prep.frames,
         fps: scene.solver.fps,

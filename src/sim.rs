@@ -41,6 +41,17 @@ pub struct Prepared {
     pub warnings: Vec<String>,
 }
 
+impl Prepared {
+    /// Hinges the plan actually simulates (0 when bending is off).
+    pub fn hinges_in_use(&self) -> usize {
+        if self.plan.contains(crate::plan::Pass::BendingForces) {
+            self.model.hinges.len()
+        } else {
+            0
+        }
+    }
+}
+
 /// Builds the model and plan and chooses the substep count.
 pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     let model = scene.build_model()?;

@@ -183,3 +183,33 @@ fn frame_is_finite(path: &Path) -> bool {
                 .all(|x| x.parse::<f32>().map(f32::is_finite).unwrap_or(false))
         })
 }
+
+#[test]
+fn bench_writes_tables_and_a_plot() {
+    let dir = out_dir("bench");
+    let r = drapekit(&[
+        "bench",
+        "--sizes",
+        "4,6",
+        "--substeps",
+        "2",
+        "--repeats",
+        "1",
+        "--adapter",
+        "fallback",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let csv = std::fs::read_to_string(dir.join("bench.csv")).unwrap();
+    // A header plus one row per size and backend (the GPU rows need an adapter).
+    let backends = if common::gpu().is_some() { 2 } else { 1 };
+    assert_eq!(csv.lines().count(), 1 + 2 * backends, "{csv}");
+    assert!(csv
+        .lines()
+        .skip(1)
+        .all(|l| l.starts_with("4,") || l.starts_with("6,")));
+    let svg = std::fs::read_to_string(dir.join("bench.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("particle-substeps / s"));
+    assert!(dir.join("bench.md").exists());
+}

@@ -93,3 +93,34 @@ fn hinge_layout() {
         ],
     );
 }
+
+/// A `u32` constant of common.wgsl, as naga evaluates it.
+fn wgsl_const(name: &str) -> u32 {
+    let module = validate_wgsl("common.wgsl", COMMON_WGSL).expect("common.wgsl validates");
+    for (_, c) in module.constants.iter() {
+        if c.name.as_deref() == Some(name) {
+            if let naga::Expression::Literal(naga::Literal::U32(v)) =
+                module.global_expressions[c.init]
+            {
+                return v;
+            }
+        }
+    }
+    panic!("u32 constant {name} not found in common.wgsl");
+}
+
+#[test]
+fn shared_constants_match() {
+    use drapekit::gpu::layout::{TEXELS_PER_ROW, WORKGROUP_SIZE};
+    assert_eq!(wgsl_const("TEXELS_PER_ROW"), TEXELS_PER_ROW);
+    assert_eq!(wgsl_const("WORKGROUP_SIZE"), WORKGROUP_SIZE);
+    // Texture rows are copied to and from buffers, which needs 256-byte aligned rows.
+    assert_eq!((TEXELS_PER_ROW * 4) % 256, 0, "r32uint rows");
+}
+
+#[test]
+fn structs_stored_in_texels_fill_whole_texels() {
+    // unpack_spring and unpack_hinge read one and two rgba32uint texels (16 bytes each).
+    assert_eq!(size_of::<SpringRef>(), 16);
+    assert_eq!(size_of::<Hinge>(), 32);
+}
