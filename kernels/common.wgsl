@@ -55,12 +55,27 @@ struct Hinge {
     _pad1: u32,
 }
 
+// A seam pair: vertex v.x is pulled towards the partner point (1 − weight)·x[v.y] + weight·x[v.z]
+// on the other edge by a zero-rest-length spring; the partner's ends take the reaction.
+// Uploaded as two rgba32uint texels, floats as their bits.
+struct Seam {
+    v: vec4<u32>,                // x: seam vertex, y, z: partner segment, w: unused
+    weight: f32,                 // of v.z
+    stiffness: f32,              // N/m
+    damping: f32,                // N·s/m, on the relative velocity
+    _pad0: u32,
+}
+
 fn unpack_spring(t: vec4<u32>) -> SpringRef {
     return SpringRef(t.x, bitcast<f32>(t.y), bitcast<f32>(t.z), bitcast<f32>(t.w));
 }
 
 fn unpack_hinge(a: vec4<u32>, b: vec4<u32>) -> Hinge {
     return Hinge(a, bitcast<f32>(b.x), bitcast<f32>(b.y), b.z, b.w);
+}
+
+fn unpack_seam(a: vec4<u32>, b: vec4<u32>) -> Seam {
+    return Seam(a, bitcast<f32>(b.x), bitcast<f32>(b.y), bitcast<f32>(b.z), b.w);
 }
 
 // Flattened particle index for a 2D dispatch (x up to 65535 workgroups).

@@ -13,6 +13,7 @@ pub mod mesh;
 pub mod metrics;
 pub mod model;
 pub mod output;
+pub mod pattern;
 pub mod plan;
 pub mod plot;
 pub mod run;

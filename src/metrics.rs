@@ -1,6 +1,7 @@
 //! Measurements on a read-back state; the same code serves both backends.
 
 use crate::model::{ClothModel, Spring};
+use crate::pattern::garment::SeamPair;
 use crate::solver::ParticleState;
 use glam::Vec4;
 
@@ -36,4 +37,16 @@ pub fn first_non_finite(state: &ParticleState) -> Option<(usize, &'static str)> 
         }
     }
     None
+}
+
+/// The largest gap between a seam vertex and its partner point, per stitch, in m.
+pub fn seam_gaps(pairs: &[SeamPair], stitches: usize, positions: &[Vec4]) -> Vec<f32> {
+    let p = |i: u32| positions[i as usize].truncate();
+    let mut gaps = vec![0.0f32; stitches];
+    for s in pairs {
+        let partner = (1.0 - s.w) * p(s.b[0]) + s.w * p(s.b[1]);
+        let gap = p(s.a).distance(partner);
+        gaps[s.stitch as usize] = gaps[s.stitch as usize].max(gap);
+    }
+    gaps
 }

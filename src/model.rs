@@ -1,7 +1,7 @@
 //! The cloth model: particles, springs, hinges and triangles, in SI units, plus the CSR
 //! incidence lists that let each particle gather its forces without atomics.
 
-use crate::gpu::layout::{Hinge, SpringRef, INTEGRATOR_EXPLICIT};
+use crate::gpu::layout::{Hinge, Seam, SpringRef, INTEGRATOR_EXPLICIT};
 use crate::mesh::TriMesh;
 use glam::{Vec3, Vec4};
 
@@ -48,6 +48,8 @@ pub struct ClothModel {
     pub springs: Vec<Spring>,
     /// Bending hinges on interior edges.
     pub hinges: Vec<Hinge>,
+    /// Seam pairs (empty unless the cloth comes from a sewing pattern).
+    pub seams: Vec<Seam>,
 }
 
 /// A compressed-sparse-row incidence list: `items[offsets[i]..offsets[i + 1]]` belong to particle i.
@@ -156,6 +158,7 @@ impl ClothModel {
             triangles: mesh.triangles.clone(),
             springs,
             hinges,
+            seams: Vec::new(),
         }
     }
 
@@ -216,6 +219,21 @@ impl ClothModel {
         Csr::from_pairs(self.len(), &pairs)
     }
 
+    /// Seam refs per particle: pair index · 4 + role (0: seam vertex, 1, 2: partner segment
+    /// ends). A partner end with zero weight gets no ref: its share of the force is zero.
+    pub fn seam_csr(&self) -> Csr<u32> {
+        let mut pairs = Vec::with_capacity(3 * self.seams.len());
+        for (k, s) in self.seams.iter().enumerate() {
+            let shares = [1.0, 1.0 - s.weight, s.weight];
+            for role in 0..3 {
+                if shares[role] != 0.0 {
+                    pairs.push((s.v[role], (k * 4 + role) as u32));
+                }
+            }
+        }
+        Csr::from_pairs(self.len(), &pairs)
+    }
+
     /// Triangle indices per particle.
     pub fn triangle_csr(&self) -> Csr<u32> {
         let mut pairs = Vec::with_capacity(3 * self.triangles.len());
@@ -250,6 +268,15 @@ impl ClothModel {
             for e in s.ends {
                 k_sum[e as usize] += s.stiffness;
                 c_sum[e as usize] += s.damping;
+            }
+        }
+        // A seam pair is a zero-length spring between the vertex and the weighted partner
+        // point: its stiffness matrix k·g·gᵀ with g = (1, −(1−w), −w) has row sums 2k·g_i.
+        for s in &self.seams {
+            let shares = [1.0, 1.0 - s.weight, s.weight];
+            for role in 0..3 {
+                k_sum[s.v[role] as usize] += shares[role] * s.stiffness;
+                c_sum[s.v[role] as usize] += shares[role] * s.damping;
             }
         }
         for h in &self.hinges {

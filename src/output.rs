@@ -81,6 +81,14 @@ pub struct Summary {
     pub max_edge_strain: f32,
     /// Kinetic energy at the last good frame, in J.
     pub kinetic_energy_j: f64,
+    /// Seams (stitches) in the pattern; 0 without one.
+    pub seams: usize,
+    /// Seams whose every pair gap is below the scene's `seam_closed_gap_m` at the last frame.
+    pub seams_closed: usize,
+    /// Largest seam pair gap at the last frame, in m (`null` without seams).
+    pub max_seam_gap_m: Option<f32>,
+    /// The first output frame at which every seam was closed.
+    pub seams_closed_frame: Option<u32>,
     /// Whether every frame was finite.
     pub finite: bool,
     /// Set when the settle rule stopped the run early.

@@ -14,16 +14,19 @@ pub enum Pass {
     BendingForces,
     /// Per-triangle wind drag.
     WindForces,
+    /// Seam penalty springs between sewn edges.
+    SeamForces,
     /// Euler integration; always last.
     Integrate,
 }
 
 impl Pass {
     /// Every stage, in execution order.
-    pub const ALL: [Pass; 4] = [
+    pub const ALL: [Pass; 5] = [
         Pass::SpringForces,
         Pass::BendingForces,
         Pass::WindForces,
+        Pass::SeamForces,
         Pass::Integrate,
     ];
 
@@ -33,6 +36,7 @@ impl Pass {
             Pass::SpringForces => "spring_forces",
             Pass::BendingForces => "bending_forces",
             Pass::WindForces => "wind_forces",
+            Pass::SeamForces => "seam_forces",
             Pass::Integrate => "integrate",
         }
     }
@@ -48,6 +52,7 @@ impl Pass {
             Pass::SpringForces => include_str!("../kernels/spring_forces.wgsl"),
             Pass::BendingForces => include_str!("../kernels/bending_forces.wgsl"),
             Pass::WindForces => include_str!("../kernels/wind_forces.wgsl"),
+            Pass::SeamForces => include_str!("../kernels/seam_forces.wgsl"),
             Pass::Integrate => include_str!("../kernels/integrate.wgsl"),
         }
     }
@@ -76,6 +81,7 @@ impl PassPlan {
             Pass::SpringForces => !model.springs.is_empty(),
             Pass::BendingForces => effects.bending && !model.hinges.is_empty(),
             Pass::WindForces => effects.wind && !model.triangles.is_empty(),
+            Pass::SeamForces => !model.seams.is_empty(),
             Pass::Integrate => true,
         };
         PassPlan {

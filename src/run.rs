@@ -146,6 +146,12 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
         passes: prep.plan.names(),
         max_edge_strain: stats.max_edge_strain,
         kinetic_energy_j: stats.kinetic_energy_j,
+        seams: stats.seam_gaps.len(),
+        seams_closed: (stats.seam_gaps.iter())
+            .filter(|&&g| g < prep.seam_closed_gap)
+            .count(),
+        max_seam_gap_m: stats.seam_gaps.iter().copied().reduce(f32::max),
+        seams_closed_frame: stats.seams_closed_frame,
         finite: stats.finite,
         settled: stats.settled.clone(),
         warnings: prep.warnings.clone(),

@@ -4,7 +4,10 @@
 use crate::error::InputError;
 use crate::gpu::layout::{INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC};
 use crate::mesh::{GridPlane, TriMesh};
+use crate::gpu::layout::Seam;
 use crate::model::{ClothModel, Fabric};
+use crate::pattern::garment::{Garment, GarmentOptions, Placement};
+use crate::pattern::Pattern;
 use crate::plan::Effects;
 use glam::Vec3;
 use serde::Deserialize;
@@ -30,6 +33,36 @@ struct RawScene {
 struct RawCloth {
     grid: Option<RawGrid>,
     mesh: Option<RawMesh>,
+    pattern: Option<RawPattern>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPattern {
+    path: String,
+    #[serde(default = "default_particle_distance")]
+    particle_distance_m: f64,
+    seam_stiffness_n_m: Option<f64>,
+    #[serde(default = "default_closed_gap")]
+    seam_closed_gap_m: f64,
+    #[serde(default)]
+    placement: std::collections::BTreeMap<String, RawPlacement>,
+}
+
+fn default_particle_distance() -> f64 {
+    0.01
+}
+
+fn default_closed_gap() -> f64 {
+    0.001
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPlacement {
+    translation: [f64; 3],
+    #[serde(default)]
+    rotation_deg: [f64; 3],
 }
 
 #[derive(Deserialize)]
@@ -205,6 +238,17 @@ pub enum ClothSource {
         center: Vec3,
         /// The world plane the grid lies in.
         plane: GridPlane,
+    },
+    /// A GarmentCode sewing pattern, sewn by seam forces.
+    Pattern {
+        /// Absolute or scene-relative path, resolved.
+        path: PathBuf,
+        /// Meshing and placement options.
+        options: GarmentOptions,
+        /// Seam pair stiffness in N/m.
+        seam_stiffness: f32,
+        /// A seam counts as closed when every pair's gap is below this, in m.
+        closed_gap: f32,
     },
     /// A triangle mesh from an OBJ file.
     Mesh {
@@ -487,8 +531,8 @@ impl Scene {
         let c = Checker { path, src };
         let base = path.parent().unwrap_or(Path::new("."));
 
-        let cloth = match (raw.cloth.grid, raw.cloth.mesh) {
-            (Some(g), None) => {
+        let cloth = match (raw.cloth.grid, raw.cloth.mesh, raw.cloth.pattern) {
+            (Some(g), None, None) => {
                 let plane = match g.plane.as_str() {
                     "xy" => GridPlane::Xy,
                     "xz" => GridPlane::Xz,
@@ -510,7 +554,7 @@ impl Scene {
                     plane,
                 }
             }
-            (None, Some(m)) => {
+            (None, Some(m), None) => {
                 let scale = match m.units.as_str() {
                     "m" => 1.0,
                     "dm" => 0.1,
@@ -531,11 +575,39 @@ impl Scene {
                     offset: c.vec3("cloth.mesh", "offset_m", m.offset_m)?,
                 }
             }
+            (None, None, Some(p)) => {
+                let t = "cloth.pattern";
+                let stretch = raw.fabric.stretch_stiffness_n_m;
+                let mut placement = std::collections::HashMap::new();
+                for (name, pl) in &p.placement {
+                    let table = format!("cloth.pattern.placement.{name}");
+                    placement.insert(
+                        name.clone(),
+                        Placement {
+                            translation: c.vec3(&table, "translation", pl.translation)?.as_dvec3(),
+                            rotation_deg: c.vec3(&table, "rotation_deg", pl.rotation_deg)?.as_dvec3(),
+                        },
+                    );
+                }
+                ClothSource::Pattern {
+                    path: base.join(&p.path),
+                    options: GarmentOptions {
+                        particle_distance: c.positive(t, "particle_distance_m", p.particle_distance_m, "m")? as f64,
+                        placement,
+                    },
+                    seam_stiffness: match p.seam_stiffness_n_m {
+                        Some(k) => c.positive(t, "seam_stiffness_n_m", k, "N/m")?,
+                        // Twice the fabric's stretch stiffness (validated with the fabric).
+                        None => (2.0 * stretch) as f32,
+                    },
+                    closed_gap: c.positive(t, "seam_closed_gap_m", p.seam_closed_gap_m, "m")?,
+                }
+            }
             _ => {
                 return Err(c.err(
                     "cloth",
                     "",
-                    "needs exactly one of [cloth.grid] or [cloth.mesh]",
+                    "needs exactly one of [cloth.grid], [cloth.mesh] or [cloth.pattern]",
                     "keep one of the two sections",
                 ))
             }
@@ -828,7 +900,17 @@ impl Scene {
                 }
                 Ok(mesh)
             }
+            ClothSource::Pattern { .. } => Ok(self.build_garment()?.expect("a pattern").mesh),
         }
+    }
+
+    /// The sewn cloth of a `[cloth.pattern]` scene (`None` for grids and meshes).
+    pub fn build_garment(&self) -> Result<Option<Garment>, InputError> {
+        let ClothSource::Pattern { path, options, .. } = &self.cloth else {
+            return Ok(None);
+        };
+        let pattern = Pattern::load(path)?;
+        Ok(Some(Garment::build(&pattern, options)?))
     }
 
     /// The particles each pin entry selects; an entry that selects nothing is an error.
@@ -895,10 +977,35 @@ impl Scene {
         Ok(all)
     }
 
-    /// Builds the cloth model: mesh, fabric and pins.
-    pub fn build_model(&self) -> Result<ClothModel, InputError> {
-        let mesh = self.build_mesh()?;
+    /// Builds the cloth model (mesh, fabric, pins and seams) and, for patterns, the garment.
+    pub fn build_model(&self) -> Result<(ClothModel, Option<Garment>), InputError> {
+        let garment = self.build_garment()?;
+        let mesh = match &garment {
+            Some(g) => g.mesh.clone(),
+            None => self.build_mesh()?,
+        };
         let pinned = self.pinned_particles(&mesh)?;
-        Ok(ClothModel::from_mesh(&mesh, &self.fabric, &pinned))
+        let mut model = ClothModel::from_mesh(&mesh, &self.fabric, &pinned);
+        if let (Some(g), ClothSource::Pattern { seam_stiffness, .. }) = (&garment, &self.cloth) {
+            model.seams = g
+                .seam_pairs
+                .iter()
+                .map(|p| {
+                    let m = |i: u32| model.masses[i as usize];
+                    let partner_mass = (1.0 - p.w) * m(p.b[0]) + p.w * m(p.b[1]);
+                    let reduced = m(p.a) * partner_mass / (m(p.a) + partner_mass);
+                    Seam {
+                        v: [p.a, p.b[0], p.b[1], 0],
+                        weight: p.w,
+                        stiffness: *seam_stiffness,
+                        damping: 2.0
+                            * self.fabric.damping_ratio
+                            * (*seam_stiffness * reduced).sqrt(),
+                        _pad0: 0,
+                    }
+                })
+                .collect();
+        }
+        Ok((model, garment))
     }
 }

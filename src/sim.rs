@@ -6,7 +6,8 @@ use crate::gpu::layout::{SimParams, SubstepParams};
 use crate::metrics;
 use crate::model::ClothModel;
 use crate::plan::PassPlan;
-use crate::scene::{Scene, Wind};
+use crate::pattern::garment::Garment;
+use crate::scene::{ClothSource, Scene, Wind};
 use crate::solver::{ParticleState, Solver};
 use serde::Serialize;
 use std::time::Instant;
@@ -39,6 +40,10 @@ pub struct Prepared {
     pub settle_ke_per_particle: Option<f32>,
     /// Things the user should know (e.g. a substep above the stable estimate).
     pub warnings: Vec<String>,
+    /// The sewn pattern, for `[cloth.pattern]` scenes.
+    pub garment: Option<Garment>,
+    /// A seam is closed when all its pair gaps are below this, in m.
+    pub seam_closed_gap: f32,
 }
 
 impl Prepared {
@@ -54,7 +59,11 @@ impl Prepared {
 
 /// Builds the model and plan and chooses the substep count.
 pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
-    let model = scene.build_model()?;
+    let (model, garment) = scene.build_model()?;
+    let seam_closed_gap = match &scene.cloth {
+        ClothSource::Pattern { closed_gap, .. } => *closed_gap,
+        _ => 0.0,
+    };
     let plan = PassPlan::new(&model, scene.effects());
     let s = &scene.solver;
     let frame_dt = 1.0 / s.fps;
@@ -129,6 +138,8 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         wind,
         settle_ke_per_particle: s.settle_ke_per_particle,
         warnings,
+        garment,
+        seam_closed_gap,
     })
 }
 
@@ -176,6 +187,10 @@ pub struct RunStats {
     pub finite: bool,
     /// Set when the settle rule stopped the run.
     pub settled: Option<Settled>,
+    /// Largest pair gap per seam at the last good frame, in m (empty without seams).
+    pub seam_gaps: Vec<f32>,
+    /// The first output frame at which every seam was closed.
+    pub seams_closed_frame: Option<u32>,
 }
 
 /// Runs `prep.frames` output frames on `solver`, calling `on_frame` with each finite frame
@@ -189,6 +204,11 @@ pub fn simulate(
 ) -> Result<(), Error> {
     let initial = solver.state()?;
     stats.finite = metrics::first_non_finite(&initial).is_none();
+    let seam_gaps = |state: &ParticleState| match &prep.garment {
+        Some(g) => metrics::seam_gaps(&g.seam_pairs, g.stitches, &state.positions),
+        None => Vec::new(),
+    };
+    stats.seam_gaps = seam_gaps(&initial);
     on_frame(0, &initial)?;
     let free = prep.model.pinned.iter().filter(|p| !**p).count().max(1) as f64;
     for frame in 1..=prep.frames {
@@ -212,6 +232,11 @@ pub fn simulate(
             &prep.model.springs,
         ));
         stats.kinetic_energy_j = metrics::kinetic_energy(&prep.model, &state);
+        stats.seam_gaps = seam_gaps(&state);
+        let all_closed = stats.seam_gaps.iter().all(|&g| g < prep.seam_closed_gap);
+        if !stats.seam_gaps.is_empty() && all_closed && stats.seams_closed_frame.is_none() {
+            stats.seams_closed_frame = Some(frame);
+        }
         on_frame(frame, &state)?;
         if let Some(threshold) = prep.settle_ke_per_particle {
             let per_particle = stats.kinetic_energy_j / free;

@@ -3,16 +3,18 @@
 
 mod bending_forces;
 mod integrate;
+mod seam_forces;
 mod spring_forces;
 mod wind_forces;
 
 pub use bending_forces::{bending_forces, hinge_force};
 pub use integrate::integrate;
+pub use seam_forces::{seam_force, seam_forces};
 pub use spring_forces::spring_forces;
 pub use wind_forces::wind_forces;
 
 use crate::error::Error;
-use crate::gpu::layout::{Hinge, SimParams, SpringRef, SubstepParams};
+use crate::gpu::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams};
 use crate::model::{ClothModel, Csr};
 use crate::plan::{Pass, PassPlan};
 use crate::solver::{AdapterReport, ParticleState, Solver};
@@ -31,6 +33,7 @@ pub struct CpuSolver {
     springs: Option<Csr<SpringRef>>,
     hinges: Option<(Vec<Hinge>, Csr<u32>)>,
     triangles: Option<(Vec<[u32; 4]>, Csr<u32>)>,
+    seams: Option<(Vec<Seam>, Csr<u32>)>,
 }
 
 impl CpuSolver {
@@ -52,6 +55,9 @@ impl CpuSolver {
             triangles: plan
                 .contains(Pass::WindForces)
                 .then(|| (model.packed_triangles(), model.triangle_csr())),
+            seams: plan
+                .contains(Pass::SeamForces)
+                .then(|| (model.seams.clone(), model.seam_csr())),
         }
     }
 
@@ -106,6 +112,21 @@ impl CpuSolver {
                     &csr.offsets,
                     &csr.items,
                     tris,
+                );
+            }
+            Pass::SeamForces => {
+                let (seams, csr) = self
+                    .seams
+                    .as_ref()
+                    .expect("seam_forces is not in the plan");
+                seam_forces(
+                    p,
+                    &self.pos,
+                    &self.vel,
+                    &mut self.force,
+                    &csr.offsets,
+                    &csr.items,
+                    seams,
                 );
             }
             Pass::Integrate => integrate(p, &mut self.pos, &mut self.vel, &mut self.force),

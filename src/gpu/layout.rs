@@ -73,6 +73,23 @@ pub struct Hinge {
     pub _pad1: u32,
 }
 
+/// A seam pair (WGSL `Seam`): vertex `v[0]` is pulled towards
+/// (1 − weight)·x[v[1]] + weight·x[v[2]].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Seam {
+    /// Seam vertex, partner segment ends, unused.
+    pub v: [u32; 4],
+    /// Weight of `v[2]` in the partner point.
+    pub weight: f32,
+    /// Stiffness in N/m.
+    pub stiffness: f32,
+    /// Damping on the relative velocity in N·s/m.
+    pub damping: f32,
+    /// Padding.
+    pub _pad0: u32,
+}
+
 /// Integrator codes shared with `integrate.wgsl`.
 pub const INTEGRATOR_EXPLICIT: u32 = 0;
 /// Semi-implicit (symplectic) Euler.

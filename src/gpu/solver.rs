@@ -164,6 +164,12 @@ impl GpuSolver {
                     let tris = model.packed_triangles();
                     add("triangles", Rgba32Uint, bytemuck::cast_slice(&tris))?;
                 }
+                Pass::SeamForces => {
+                    let csr = model.seam_csr();
+                    add("seam_offsets", R32Uint, bytemuck::cast_slice(&csr.offsets))?;
+                    add("seam_refs", R32Uint, bytemuck::cast_slice(&csr.items))?;
+                    add("seams", Rgba32Uint, bytemuck::cast_slice(&model.seams))?;
+                }
                 Pass::Integrate => {}
             }
             let (force_out, force_in) = if pass.is_force() {
@@ -199,6 +205,15 @@ impl GpuSolver {
                     Pass::WindForces => vec![
                         Binding::Uniform(&params_buf),
                         Binding::SubstepUniform(substep_buf.expect("wind needs substep params")),
+                        Binding::Read(&pos[p]),
+                        Binding::Read(&vel[p]),
+                        out(),
+                        o(0),
+                        o(1),
+                        o(2),
+                    ],
+                    Pass::SeamForces => vec![
+                        Binding::Uniform(&params_buf),
                         Binding::Read(&pos[p]),
                         Binding::Read(&vel[p]),
                         out(),

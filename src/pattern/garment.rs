@@ -1,0 +1,197 @@
+//! From a pattern to a cloth: edges sampled by arc length, panels triangulated and placed in
+//! 3D, and seam pairs matched by arc-length fraction.
+
+use super::mesher::{first_crossing, triangulate};
+use super::{EdgeRef, Pattern};
+use crate::error::InputError;
+use crate::mesh::TriMesh;
+use glam::{DVec2, DVec3, Vec2};
+use std::collections::HashMap;
+
+/// A panel placement in pattern units and Euler degrees (as the spec's own).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    /// Translation, pattern units.
+    pub translation: DVec3,
+    /// Rotation, Euler degrees, R = Rz·Ry·Rx.
+    pub rotation_deg: DVec3,
+}
+
+/// How to build the cloth.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GarmentOptions {
+    /// Target particle spacing in m.
+    pub particle_distance: f64,
+    /// Placements that replace the spec's, by panel name.
+    pub placement: HashMap<String, Placement>,
+}
+
+/// A seam vertex and its partner point on the other edge: (1 − w)·x[b[0]] + w·x[b[1]].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SeamPair {
+    /// The seam vertex.
+    pub a: u32,
+    /// The partner segment's ends.
+    pub b: [u32; 2],
+    /// Weight of `b[1]`.
+    pub w: f32,
+    /// Which stitch of the pattern.
+    pub stitch: u32,
+}
+
+/// The assembled cloth.
+#[derive(Clone, Debug)]
+pub struct Garment {
+    /// Particles in m and triangles facing outward.
+    pub mesh: TriMesh,
+    /// Each particle's 2D pattern coordinate, in m.
+    pub uv: Vec<Vec2>,
+    /// The particles along each edge, per panel, in edge direction (ends included).
+    pub edge_particles: Vec<Vec<Vec<u32>>>,
+    /// Seam pairs of all stitches.
+    pub seam_pairs: Vec<SeamPair>,
+    /// Number of stitches (seams).
+    pub stitches: usize,
+}
+
+impl Garment {
+    /// Builds the cloth for `pattern`.
+    pub fn build(pattern: &Pattern, options: &GarmentOptions) -> Result<Garment, InputError> {
+        let unit = pattern.units_in_meter;
+        let spacing = options.particle_distance * unit; // in pattern units
+        let err = |loc: String, problem: String, fix: &str| {
+            InputError::new(&pattern.path, loc, problem, fix)
+        };
+        // Segments per edge at the particle distance; both edges of a stitch take the larger.
+        let mut segments: Vec<Vec<usize>> = pattern
+            .panels
+            .iter()
+            .map(|p| {
+                p.edges
+                    .iter()
+                    .map(|e| ((e.curve.length() / spacing).round() as usize).max(1))
+                    .collect()
+            })
+            .collect();
+        for s in &pattern.stitches {
+            let [a, b] = s.sides;
+            let n = segments[a.panel][a.edge].max(segments[b.panel][b.edge]);
+            segments[a.panel][a.edge] = n;
+            segments[b.panel][b.edge] = n;
+        }
+        let mut positions = Vec::new();
+        let mut uv = Vec::new();
+        let mut triangles = Vec::new();
+        let mut edge_particles: Vec<Vec<Vec<u32>>> = Vec::new();
+        for (pi, panel) in pattern.panels.iter().enumerate() {
+            let mut outline: Vec<DVec2> = Vec::new();
+            let mut edge_start = Vec::new();
+            for (ei, e) in panel.edges.iter().enumerate() {
+                edge_start.push(outline.len());
+                let pts = e.curve.sample(segments[pi][ei]);
+                outline.extend_from_slice(&pts[..pts.len() - 1]);
+            }
+            let edge_of = |seg: usize| edge_start.iter().rposition(|&s| s <= seg).unwrap_or(0);
+            if let Some((i, j)) = first_crossing(&outline) {
+                return Err(err(
+                    format!("panel '{}'", panel.name),
+                    format!("outline intersects itself: edge {} crosses edge {}", edge_of(i), edge_of(j)),
+                    "fix the vertices or curvature so that the outline is a simple loop",
+                ));
+            }
+            let mesh = triangulate(&outline, spacing).map_err(|m| {
+                err(format!("panel '{}'", panel.name), format!("cannot be triangulated: {m}"), "check the outline")
+            })?;
+            let base = positions.len() as u32;
+            let place = options.placement.get(&panel.name).copied().unwrap_or(Placement {
+                translation: panel.translation,
+                rotation_deg: panel.rotation_deg,
+            });
+            let mut placed = panel.clone();
+            placed.rotation_deg = place.rotation_deg;
+            let rotation = placed.rotation();
+            for p in &mesh.points {
+                let world = (rotation * DVec3::new(p.x, p.y, 0.0) + place.translation) / unit;
+                positions.push(world.as_vec3());
+                uv.push((*p / unit).as_vec2());
+            }
+            // Spade's triangles are counter-clockwise in the panel plane (normal +z there). A
+            // counter-clockwise loop faces +z (away from the body); a clockwise one faces −z.
+            let flip = panel.signed_area2() < 0.0;
+            for t in &mesh.triangles {
+                let t = t.map(|v| v + base);
+                triangles.push(if flip { [t[0], t[2], t[1]] } else { t });
+            }
+            let n = outline.len();
+            edge_particles.push(
+                (0..panel.edges.len())
+                    .map(|ei| {
+                        (0..=segments[pi][ei])
+                            .map(|k| base + ((edge_start[ei] + k) % n) as u32)
+                            .collect()
+                    })
+                    .collect(),
+            );
+        }
+        let mut seam_pairs = Vec::new();
+        for (k, s) in pattern.stitches.iter().enumerate() {
+            let along = |e: EdgeRef| edge_particles[e.panel][e.edge].clone();
+            let mut first = along(s.sides[0]);
+            if !s.right_wrong {
+                first.reverse();
+            }
+            let second = along(s.sides[1]);
+            seam_pairs.extend(pair_edges(&first, &second, &uv, k as u32));
+        }
+        Ok(Garment {
+            mesh: TriMesh { positions, triangles },
+            uv,
+            edge_particles,
+            seam_pairs,
+            stitches: pattern.stitches.len(),
+        })
+    }
+}
+
+/// Arc-length fraction of each point of a polyline (0 at the start, 1 at the end).
+fn fractions(ids: &[u32], uv: &[Vec2]) -> Vec<f32> {
+    let mut acc = vec![0.0f32];
+    for w in ids.windows(2) {
+        acc.push(acc.last().unwrap() + uv[w[0] as usize].distance(uv[w[1] as usize]));
+    }
+    let total = acc.last().copied().unwrap_or(0.0).max(f32::MIN_POSITIVE);
+    acc.iter().map(|a| a / total).collect()
+}
+
+/// The point at fraction `f` of a polyline, as (segment ends, weight of the second end).
+fn locate(ids: &[u32], fr: &[f32], f: f32) -> ([u32; 2], f32) {
+    let k = fr.partition_point(|&x| x <= f).clamp(1, ids.len() - 1) - 1;
+    let span = fr[k + 1] - fr[k];
+    let w = if span > 0.0 { ((f - fr[k]) / span).clamp(0.0, 1.0) } else { 0.0 };
+    ([ids[k], ids[k + 1]], w)
+}
+
+/// Seam pairs between two edges given in sewing order (`first[0]` meets `second[0]`): every
+/// vertex of `first` pairs with the point at the same arc-length fraction of `second`; every
+/// vertex of `second` that does not already coincide with such a point pairs with `first`.
+pub fn pair_edges(first: &[u32], second: &[u32], uv: &[Vec2], stitch: u32) -> Vec<SeamPair> {
+    // Fractions closer than this name the same point (f32 rounding of sums of ~100 lengths).
+    const SAME: f32 = 1e-5;
+    let (fa, fb) = (fractions(first, uv), fractions(second, uv));
+    let mut pairs: Vec<SeamPair> = first
+        .iter()
+        .zip(&fa)
+        .map(|(&a, &f)| {
+            let (b, w) = locate(second, &fb, f);
+            SeamPair { a, b, w, stitch }
+        })
+        .collect();
+    for (&b, &f) in second.iter().zip(&fb) {
+        if fa.iter().any(|&x| (x - f).abs() < SAME) {
+            continue;
+        }
+        let (a_seg, w) = locate(first, &fa, f);
+        pairs.push(SeamPair { a: b, b: a_seg, w, stitch });
+    }
+    pairs
+}
