@@ -2,9 +2,9 @@
 //! Every key, its unit and its default are documented in README.md ("Scene format").
 
 use crate::error::InputError;
+use crate::gpu::layout::Seam;
 use crate::gpu::layout::{INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC};
 use crate::mesh::{GridPlane, TriMesh};
-use crate::gpu::layout::Seam;
 use crate::model::{ClothModel, Fabric};
 use crate::pattern::garment::{Garment, GarmentOptions, Placement};
 use crate::pattern::Pattern;
@@ -585,14 +585,21 @@ impl Scene {
                         name.clone(),
                         Placement {
                             translation: c.vec3(&table, "translation", pl.translation)?.as_dvec3(),
-                            rotation_deg: c.vec3(&table, "rotation_deg", pl.rotation_deg)?.as_dvec3(),
+                            rotation_deg: c
+                                .vec3(&table, "rotation_deg", pl.rotation_deg)?
+                                .as_dvec3(),
                         },
                     );
                 }
                 ClothSource::Pattern {
                     path: base.join(&p.path),
                     options: GarmentOptions {
-                        particle_distance: c.positive(t, "particle_distance_m", p.particle_distance_m, "m")? as f64,
+                        particle_distance: c.positive(
+                            t,
+                            "particle_distance_m",
+                            p.particle_distance_m,
+                            "m",
+                        )? as f64,
                         placement,
                     },
                     seam_stiffness: match p.seam_stiffness_n_m {

@@ -58,3 +58,56 @@ fn tempdir(scene: &std::path::Path) -> std::path::PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     dir
 }
+
+/// fixtures/bad/patterns/: each `X.json` is a broken GarmentCode pattern and `X.expect` lists
+/// the texts its error must contain (the panel and edge or stitch, and what is wrong).
+#[test]
+fn every_bad_pattern_is_refused_cleanly() {
+    let dir = common::fixture("bad/patterns");
+    let mut checked = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().and_then(|e| e.to_str()) != Some("json") {
+            continue;
+        }
+        let name = path.file_name().unwrap().to_str().unwrap().to_string();
+        let expect = std::fs::read_to_string(path.with_extension("expect"))
+            .unwrap_or_else(|_| panic!("{name} lacks its .expect file"));
+        let work = tempdir(&path);
+        std::fs::create_dir_all(&work).unwrap();
+        let scene = work.join("scene.toml");
+        let scene_text = format!(
+            "[cloth.pattern]\npath = {:?}\n\n[fabric]\ndensity_kg_m2 = 0.15\n\
+             stretch_stiffness_n_m = 300.0\n\n[solver]\nfps = 24\nframes = 2\n",
+            path.to_str().unwrap()
+        );
+        std::fs::write(&scene, scene_text).unwrap();
+        let out = work.join("out");
+        let result = Command::new(env!("CARGO_BIN_EXE_drapekit"))
+            .args(["run", scene.to_str().unwrap(), "--backend", "cpu"])
+            .args(["--out", out.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(
+            result.status.code(),
+            Some(2),
+            "{name}: exit code; stderr:\n{stderr}"
+        );
+        assert!(
+            stderr.contains(&name),
+            "{name}: the error does not name the file:\n{stderr}"
+        );
+        for line in expect.lines().filter(|l| !l.is_empty()) {
+            assert!(
+                stderr.contains(line),
+                "{name}: expected {line:?} in:\n{stderr}"
+            );
+        }
+        assert!(stderr.contains("fix:"), "{name}: no fix in:\n{stderr}");
+        assert!(!stderr.contains("panicked"), "{name}: panicked:\n{stderr}");
+        assert!(!out.exists(), "{name}: wrote {}", out.display());
+        checked += 1;
+    }
+    assert!(checked >= 9, "only {checked} bad patterns found");
+}

@@ -18,8 +18,11 @@ fn flag() -> Prepared {
 }
 
 fn pass_parity(pass: Pass) {
+    pass_parity_in(flag(), pass);
+}
+
+fn pass_parity_in(prep: Prepared, pass: Pass) {
     let Some(ctx) = gpu() else { return };
-    let prep = flag();
     assert!(prep.plan.contains(pass));
     let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
     let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
@@ -69,6 +72,15 @@ fn parity_bending_forces() {
 #[test]
 fn parity_wind_forces() {
     pass_parity(Pass::WindForces);
+}
+
+#[test]
+fn parity_seam_forces() {
+    // The T-shirt pattern as placed: every seam pair is ~10 to 30 cm apart, so every pair pulls.
+    // Its seam forces are sums of ≤ 6 terms k·(x_p − x_a), whose cancellation is mild; the
+    // force tolerance below covers them as it covers springs.
+    let scene = Scene::load(&fixture("scenes/tshirt_sew.toml")).unwrap();
+    pass_parity_in(prepare(&scene).unwrap(), Pass::SeamForces);
 }
 
 #[test]

@@ -115,10 +115,7 @@ impl CpuSolver {
                 );
             }
             Pass::SeamForces => {
-                let (seams, csr) = self
-                    .seams
-                    .as_ref()
-                    .expect("seam_forces is not in the plan");
+                let (seams, csr) = self.seams.as_ref().expect("seam_forces is not in the plan");
                 seam_forces(
                     p,
                     &self.pos,

@@ -44,7 +44,13 @@ impl Curve {
     /// The SVG-style arc through `start` and `end` with `radius`: `large_arc` takes the longer
     /// way round, `right` bulges to the right of start→end (as GarmentCode's circle edges).
     /// `None` when the radius is shorter than half the chord or the points coincide.
-    pub fn arc(start: DVec2, end: DVec2, radius: f64, large_arc: bool, right: bool) -> Option<Self> {
+    pub fn arc(
+        start: DVec2,
+        end: DVec2,
+        radius: f64,
+        large_arc: bool,
+        right: bool,
+    ) -> Option<Self> {
         let chord = (end - start).length();
         if !(chord > 0.0) || !(radius.is_finite()) || radius < 0.5 * chord * (1.0 - 1e-9) {
             return None;

@@ -95,18 +95,30 @@ impl Garment {
             if let Some((i, j)) = first_crossing(&outline) {
                 return Err(err(
                     format!("panel '{}'", panel.name),
-                    format!("outline intersects itself: edge {} crosses edge {}", edge_of(i), edge_of(j)),
+                    format!(
+                        "outline intersects itself: edge {} crosses edge {}",
+                        edge_of(i),
+                        edge_of(j)
+                    ),
                     "fix the vertices or curvature so that the outline is a simple loop",
                 ));
             }
             let mesh = triangulate(&outline, spacing).map_err(|m| {
-                err(format!("panel '{}'", panel.name), format!("cannot be triangulated: {m}"), "check the outline")
+                err(
+                    format!("panel '{}'", panel.name),
+                    format!("cannot be triangulated: {m}"),
+                    "check the outline",
+                )
             })?;
             let base = positions.len() as u32;
-            let place = options.placement.get(&panel.name).copied().unwrap_or(Placement {
-                translation: panel.translation,
-                rotation_deg: panel.rotation_deg,
-            });
+            let place = options
+                .placement
+                .get(&panel.name)
+                .copied()
+                .unwrap_or(Placement {
+                    translation: panel.translation,
+                    rotation_deg: panel.rotation_deg,
+                });
             let mut placed = panel.clone();
             placed.rotation_deg = place.rotation_deg;
             let rotation = placed.rotation();
@@ -144,7 +156,10 @@ impl Garment {
             seam_pairs.extend(pair_edges(&first, &second, &uv, k as u32));
         }
         Ok(Garment {
-            mesh: TriMesh { positions, triangles },
+            mesh: TriMesh {
+                positions,
+                triangles,
+            },
             uv,
             edge_particles,
             seam_pairs,
@@ -167,7 +182,11 @@ fn fractions(ids: &[u32], uv: &[Vec2]) -> Vec<f32> {
 fn locate(ids: &[u32], fr: &[f32], f: f32) -> ([u32; 2], f32) {
     let k = fr.partition_point(|&x| x <= f).clamp(1, ids.len() - 1) - 1;
     let span = fr[k + 1] - fr[k];
-    let w = if span > 0.0 { ((f - fr[k]) / span).clamp(0.0, 1.0) } else { 0.0 };
+    let w = if span > 0.0 {
+        ((f - fr[k]) / span).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     ([ids[k], ids[k + 1]], w)
 }
 
@@ -191,7 +210,12 @@ pub fn pair_edges(first: &[u32], second: &[u32], uv: &[Vec2], stitch: u32) -> Ve
             continue;
         }
         let (a_seg, w) = locate(first, &fa, f);
-        pairs.push(SeamPair { a: b, b: a_seg, w, stitch });
+        pairs.push(SeamPair {
+            a: b,
+            b: a_seg,
+            w,
+            stitch,
+        });
     }
     pairs
 }

@@ -119,7 +119,12 @@ struct Reader<'a> {
 }
 
 impl Reader<'_> {
-    fn err(&self, location: impl Into<String>, problem: impl Into<String>, fix: &str) -> InputError {
+    fn err(
+        &self,
+        location: impl Into<String>,
+        problem: impl Into<String>,
+        fix: &str,
+    ) -> InputError {
         InputError::new(self.path, location, problem, fix)
     }
 
@@ -147,9 +152,17 @@ impl Reader<'_> {
         }
     }
 
-    fn vec<const N: usize>(&self, v: Option<&Value>, location: &str) -> Result<[f64; N], InputError> {
+    fn vec<const N: usize>(
+        &self,
+        v: Option<&Value>,
+        location: &str,
+    ) -> Result<[f64; N], InputError> {
         let items = v.and_then(Value::as_array).ok_or_else(|| {
-            self.err(location, format!("expected a list of {N} numbers"), "give [x, y, ...]")
+            self.err(
+                location,
+                format!("expected a list of {N} numbers"),
+                "give [x, y, ...]",
+            )
         })?;
         if items.len() != N {
             return Err(self.err(
@@ -217,12 +230,22 @@ impl Pattern {
             }
         };
         let pattern = root.get("pattern").ok_or_else(|| {
-            r.err("pattern", "is missing", "a GarmentCode file has {\"pattern\": {\"panels\": ..., \"stitches\": ...}}")
+            r.err(
+                "pattern",
+                "is missing",
+                "a GarmentCode file has {\"pattern\": {\"panels\": ..., \"stitches\": ...}}",
+            )
         })?;
         let panel_map = pattern
             .get("panels")
             .and_then(Value::as_object)
-            .ok_or_else(|| r.err("pattern.panels", "is missing or not an object", "map panel names to panels"))?;
+            .ok_or_else(|| {
+                r.err(
+                    "pattern.panels",
+                    "is missing or not an object",
+                    "map panel names to panels",
+                )
+            })?;
         let mut panels = Vec::new();
         for (name, p) in panel_map {
             panels.push(read_panel(&r, name, p, relative)?);
@@ -231,32 +254,61 @@ impl Pattern {
         let raw_stitches = match pattern.get("stitches") {
             None => Vec::new(),
             Some(Value::Array(a)) => a.clone(),
-            Some(_) => return Err(r.err("pattern.stitches", "is not a list", "give a list of edge pairs")),
+            Some(_) => {
+                return Err(r.err(
+                    "pattern.stitches",
+                    "is not a list",
+                    "give a list of edge pairs",
+                ))
+            }
         };
         let mut used: Vec<(EdgeRef, usize)> = Vec::new();
         for (k, s) in raw_stitches.iter().enumerate() {
             let loc = format!("stitch {k}");
-            let items = s.as_array().filter(|a| a.len() == 2 || a.len() == 3).ok_or_else(|| {
-                r.err(&loc, "is not a pair of {\"panel\", \"edge\"} objects", "write [{\"panel\": a, \"edge\": i}, {\"panel\": b, \"edge\": j}]")
-            })?;
+            let items = s
+                .as_array()
+                .filter(|a| a.len() == 2 || a.len() == 3)
+                .ok_or_else(|| {
+                    r.err(
+                        &loc,
+                        "is not a pair of {\"panel\", \"edge\"} objects",
+                        "write [{\"panel\": a, \"edge\": i}, {\"panel\": b, \"edge\": j}]",
+                    )
+                })?;
             let right_wrong = match items.get(2) {
                 None => false,
                 Some(Value::String(s)) if s == "right_wrong" => true,
                 Some(other) => {
-                    return Err(r.err(&loc, format!("unknown third element {other}"), "only \"right_wrong\" is allowed"))
+                    return Err(r.err(
+                        &loc,
+                        format!("unknown third element {other}"),
+                        "only \"right_wrong\" is allowed",
+                    ))
                 }
             };
             let mut sides = [EdgeRef { panel: 0, edge: 0 }; 2];
             for (j, side) in items[..2].iter().enumerate() {
                 let pname = side.get("panel").and_then(Value::as_str).ok_or_else(|| {
-                    r.err(&loc, format!("side {j} has no \"panel\" name"), "add \"panel\": \"<name>\"")
+                    r.err(
+                        &loc,
+                        format!("side {j} has no \"panel\" name"),
+                        "add \"panel\": \"<name>\"",
+                    )
                 })?;
                 let panel = panels.iter().position(|p| p.name == pname).ok_or_else(|| {
                     let names: Vec<&str> = panels.iter().map(|p| p.name.as_str()).collect();
-                    r.err(&loc, format!("unknown panel '{pname}'"), &format!("use one of {names:?}"))
+                    r.err(
+                        &loc,
+                        format!("unknown panel '{pname}'"),
+                        &format!("use one of {names:?}"),
+                    )
                 })?;
                 let edge = side.get("edge").and_then(Value::as_u64).ok_or_else(|| {
-                    r.err(&loc, format!("side {j} has no \"edge\" index"), "add \"edge\": <index>")
+                    r.err(
+                        &loc,
+                        format!("side {j} has no \"edge\" index"),
+                        "add \"edge\": <index>",
+                    )
                 })? as usize;
                 let count = panels[panel].edges.len();
                 if edge >= count {
@@ -304,12 +356,19 @@ fn read_panel(r: &Reader, name: &str, p: &Value, relative: bool) -> Result<Panel
         v => r.vec::<3>(v, &format!("{loc}.rotation"))?,
     };
     let raw_vertices = p.get("vertices").and_then(Value::as_array).ok_or_else(|| {
-        r.err(&loc, "has no \"vertices\" list", "add \"vertices\": [[x, y], ...]")
+        r.err(
+            &loc,
+            "has no \"vertices\" list",
+            "add \"vertices\": [[x, y], ...]",
+        )
     })?;
     if raw_vertices.len() < 3 {
         return Err(r.err(
             &loc,
-            format!("has {} vertices; a panel needs at least 3", raw_vertices.len()),
+            format!(
+                "has {} vertices; a panel needs at least 3",
+                raw_vertices.len()
+            ),
             "give the panel a closed outline of 3 or more vertices",
         ));
     }
@@ -319,30 +378,62 @@ fn read_panel(r: &Reader, name: &str, p: &Value, relative: bool) -> Result<Panel
         vertices.push(DVec2::new(x, y));
     }
     let raw_edges = p.get("edges").and_then(Value::as_array).ok_or_else(|| {
-        r.err(&loc, "has no \"edges\" list", "add \"edges\": [{\"endpoints\": [0, 1]}, ...]")
+        r.err(
+            &loc,
+            "has no \"edges\" list",
+            "add \"edges\": [{\"endpoints\": [0, 1]}, ...]",
+        )
     })?;
     let mut edges = Vec::new();
     for (k, e) in raw_edges.iter().enumerate() {
         let eloc = format!("{loc}, edge {k}");
-        let ends = e.get("endpoints").and_then(Value::as_array).filter(|a| a.len() == 2);
-        let ends = ends.ok_or_else(|| r.err(&eloc, "needs \"endpoints\": [i, j]", "give two vertex indices"))?;
+        let ends = e
+            .get("endpoints")
+            .and_then(Value::as_array)
+            .filter(|a| a.len() == 2);
+        let ends = ends.ok_or_else(|| {
+            r.err(
+                &eloc,
+                "needs \"endpoints\": [i, j]",
+                "give two vertex indices",
+            )
+        })?;
         let mut endpoints = [0usize; 2];
         for (j, v) in ends.iter().enumerate() {
-            let i = v.as_u64().map(|i| i as usize).filter(|i| *i < vertices.len());
+            let i = v
+                .as_u64()
+                .map(|i| i as usize)
+                .filter(|i| *i < vertices.len());
             endpoints[j] = i.ok_or_else(|| {
-                r.err(&eloc, format!("endpoint {v} is not a vertex index"), &format!("use 0..{}", vertices.len() - 1))
+                r.err(
+                    &eloc,
+                    format!("endpoint {v} is not a vertex index"),
+                    &format!("use 0..{}", vertices.len() - 1),
+                )
             })?;
         }
         let (start, end) = (vertices[endpoints[0]], vertices[endpoints[1]]);
         if endpoints[0] == endpoints[1] || start.distance(end) <= 1e-9 * (1.0 + start.length()) {
-            return Err(r.err(&eloc, "has zero length (its endpoints coincide)", "remove the edge or move one of its vertices"));
+            return Err(r.err(
+                &eloc,
+                "has zero length (its endpoints coincide)",
+                "remove the edge or move one of its vertices",
+            ));
         }
         let curve = read_curve(r, &eloc, e.get("curvature"), start, end, relative)?;
         let label = e.get("label").and_then(Value::as_str).map(str::to_string);
-        edges.push(PanelEdge { endpoints, curve, label });
+        edges.push(PanelEdge {
+            endpoints,
+            curve,
+            label,
+        });
     }
     if edges.len() < 2 {
-        return Err(r.err(&loc, "has fewer than 2 edges", "edges must form a closed loop"));
+        return Err(r.err(
+            &loc,
+            "has fewer than 2 edges",
+            "edges must form a closed loop",
+        ));
     }
     for k in 0..edges.len() {
         let next = (k + 1) % edges.len();
@@ -409,14 +500,21 @@ fn read_curve(
                 match param(k) {
                     Some(Value::Bool(b)) => Ok(*b),
                     Some(Value::Number(n)) => Ok(n.as_f64() != Some(0.0)),
-                    _ => Err(r.err(format!("{cloc}.params[{k}] ({what})"), "expected 0, 1, true or false", "give a flag")),
+                    _ => Err(r.err(
+                        format!("{cloc}.params[{k}] ({what})"),
+                        "expected 0, 1, true or false",
+                        "give a flag",
+                    )),
                 }
             };
             let (large, right) = (flag(1, "large_arc")?, flag(2, "right")?);
             Curve::arc(start, end, radius, large, right).ok_or_else(|| {
                 r.err(
                     &cloc,
-                    format!("radius {radius} is shorter than half the chord ({})", 0.5 * start.distance(end)),
+                    format!(
+                        "radius {radius} is shorter than half the chord ({})",
+                        0.5 * start.distance(end)
+                    ),
                     "use a radius of at least half the distance between the edge's endpoints",
                 )
             })
