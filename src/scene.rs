@@ -2,7 +2,7 @@
 //! Every key, its unit and its default are documented in README.md ("Scene format").
 
 use crate::error::InputError;
-use crate::gpu::layout::Seam;
+use crate::gpu::layout::{Hinge, Seam};
 use crate::gpu::layout::{INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC};
 use crate::mesh::{GridPlane, TriMesh};
 use crate::model::{ClothModel, Fabric};
@@ -47,6 +47,20 @@ struct RawPattern {
     seam_closed_gap_m: f64,
     #[serde(default)]
     placement: std::collections::BTreeMap<String, RawPlacement>,
+    #[serde(default)]
+    seams: Vec<RawSeam>,
+    #[serde(default)]
+    attach_labels: Vec<String>,
+    #[serde(default)]
+    attach_frames: i64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSeam {
+    stitch: i64,
+    #[serde(default)]
+    fold_deg: f64,
 }
 
 fn default_particle_distance() -> f64 {
@@ -249,6 +263,12 @@ pub enum ClothSource {
         seam_stiffness: f32,
         /// A seam counts as closed when every pair's gap is below this, in m.
         closed_gap: f32,
+        /// Fold angles θ0 in radians by stitch index (others fold to 0: flat).
+        folds: Vec<(usize, f32)>,
+        /// Edges with these labels are held in place for the first `attach_frames` frames.
+        attach_labels: Vec<String>,
+        /// Output frames during which labelled edges stay attached.
+        attach_frames: u32,
     },
     /// A triangle mesh from an OBJ file.
     Mesh {
@@ -608,6 +628,26 @@ impl Scene {
                         None => (2.0 * stretch) as f32,
                     },
                     closed_gap: c.positive(t, "seam_closed_gap_m", p.seam_closed_gap_m, "m")?,
+                    folds: {
+                        let mut folds = Vec::new();
+                        for (k, seam) in p.seams.iter().enumerate() {
+                            let table = format!("cloth.pattern.seams[{k}]");
+                            let stitch = c.count(&table, "stitch", seam.stitch, 0)? as usize;
+                            let fold = c.finite(&table, "fold_deg", seam.fold_deg)?;
+                            if fold.abs() >= 180.0 {
+                                return Err(c.err(
+                                    &table,
+                                    "fold_deg",
+                                    format!("{fold}° is not a fold angle"),
+                                    "use an angle between -180 and 180 degrees",
+                                ));
+                            }
+                            folds.push((stitch, fold.to_radians()));
+                        }
+                        folds
+                    },
+                    attach_labels: p.attach_labels.clone(),
+                    attach_frames: c.count(t, "attach_frames", p.attach_frames, 0)?,
                 }
             }
             _ => {
@@ -911,6 +951,34 @@ impl Scene {
         }
     }
 
+    /// The particles held by `attach_labels` for the first `attach_frames` frames.
+    pub fn attached_particles(&self, garment: &Garment) -> Result<Vec<u32>, InputError> {
+        let ClothSource::Pattern {
+            attach_labels,
+            attach_frames,
+            ..
+        } = &self.cloth
+        else {
+            return Ok(Vec::new());
+        };
+        if attach_labels.is_empty() || *attach_frames == 0 {
+            return Ok(Vec::new());
+        }
+        let ids = garment.particles_on_labelled_edges(attach_labels);
+        if ids.is_empty() {
+            let mut found: Vec<&String> = garment.edge_labels.iter().flatten().flatten().collect();
+            found.sort();
+            found.dedup();
+            return Err(self.error(
+                "cloth.pattern",
+                "attach_labels",
+                format!("no edge of the pattern has a label in {attach_labels:?}"),
+                format!("use labels the pattern has: {found:?}"),
+            ));
+        }
+        Ok(ids)
+    }
+
     /// The sewn cloth of a `[cloth.pattern]` scene (`None` for grids and meshes).
     pub fn build_garment(&self) -> Result<Option<Garment>, InputError> {
         let ClothSource::Pattern { path, options, .. } = &self.cloth else {
@@ -991,9 +1059,49 @@ impl Scene {
             Some(g) => g.mesh.clone(),
             None => self.build_mesh()?,
         };
-        let pinned = self.pinned_particles(&mesh)?;
+        let mut pinned = self.pinned_particles(&mesh)?;
+        if let Some(g) = &garment {
+            pinned.extend(self.attached_particles(g)?);
+        }
         let mut model = ClothModel::from_mesh(&mesh, &self.fabric, &pinned);
-        if let (Some(g), ClothSource::Pattern { seam_stiffness, .. }) = (&garment, &self.cloth) {
+        if let (
+            Some(g),
+            ClothSource::Pattern {
+                seam_stiffness,
+                folds,
+                ..
+            },
+        ) = (&garment, &self.cloth)
+        {
+            let c = Checker {
+                path: &self.path,
+                src: &self.source,
+            };
+            let mut fold_of = vec![0.0f32; g.stitches];
+            for (k, &(stitch, angle)) in folds.iter().enumerate() {
+                if stitch >= g.stitches {
+                    return Err(c.err(
+                        &format!("cloth.pattern.seams[{k}]"),
+                        "stitch",
+                        format!(
+                            "the pattern has {} stitches; there is no stitch {stitch}",
+                            g.stitches
+                        ),
+                        format!("use a stitch index from 0 to {}", g.stitches.max(1) - 1),
+                    ));
+                }
+                fold_of[stitch] = angle;
+            }
+            // Hinges across seams bend like the fabric and rest at the seam's fold angle.
+            if let Some(kb) = self.fabric.bending_stiffness {
+                model.hinges.extend(g.seam_hinges.iter().map(|h| Hinge {
+                    v: h.v,
+                    stiffness: kb,
+                    rest_sin_half: (0.5 * fold_of[h.stitch as usize]).sin(),
+                    _pad0: 0,
+                    _pad1: 0,
+                }));
+            }
             model.seams = g
                 .seam_pairs
                 .iter()

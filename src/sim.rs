@@ -44,6 +44,12 @@ pub struct Prepared {
     pub garment: Option<Garment>,
     /// A seam is closed when all its pair gaps are below this, in m.
     pub seam_closed_gap: f32,
+    /// Particles held in place (labelled pattern edges) until `attach_frames` have run.
+    pub attached: Vec<u32>,
+    /// Output frames after which `attached` particles are released.
+    pub attach_frames: u32,
+    /// Particles the scene's `[[pins]]` hold for the whole run.
+    pub scene_pins: Vec<u32>,
 }
 
 impl Prepared {
@@ -57,12 +63,28 @@ impl Prepared {
     }
 }
 
+fn scene_mesh(model: &ClothModel) -> crate::mesh::TriMesh {
+    crate::mesh::TriMesh {
+        positions: model.positions.clone(),
+        triangles: model.triangles.clone(),
+    }
+}
+
 /// Builds the model and plan and chooses the substep count.
 pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     let (model, garment) = scene.build_model()?;
-    let seam_closed_gap = match &scene.cloth {
-        ClothSource::Pattern { closed_gap, .. } => *closed_gap,
-        _ => 0.0,
+    let (seam_closed_gap, attach_frames) = match &scene.cloth {
+        ClothSource::Pattern {
+            closed_gap,
+            attach_frames,
+            ..
+        } => (*closed_gap, *attach_frames),
+        _ => (0.0, 0),
+    };
+    let scene_pins = scene.pinned_particles(&scene_mesh(&model))?;
+    let attached = match &garment {
+        Some(g) => scene.attached_particles(g)?,
+        None => Vec::new(),
     };
     let plan = PassPlan::new(&model, scene.effects());
     let s = &scene.solver;
@@ -140,6 +162,9 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         warnings,
         garment,
         seam_closed_gap,
+        scene_pins,
+        attached,
+        attach_frames,
     })
 }
 
@@ -191,6 +216,24 @@ pub struct RunStats {
     pub seam_gaps: Vec<f32>,
     /// The first output frame at which every seam was closed.
     pub seams_closed_frame: Option<u32>,
+    /// The frame after which attached particles were released.
+    pub released_after_frame: Option<u32>,
+}
+
+/// Gives attached particles their inverse mass back (pins from the scene stay pinned).
+fn release(
+    prep: &Prepared,
+    solver: &mut dyn Solver,
+    mut state: ParticleState,
+) -> Result<(), Error> {
+    for &i in &prep.attached {
+        let i = i as usize;
+        if !prep.scene_pins.contains(&(i as u32)) && prep.model.masses[i] > 0.0 {
+            state.positions[i].w = 1.0 / prep.model.masses[i];
+        }
+    }
+    solver.set_state(&state);
+    Ok(())
 }
 
 /// Runs `prep.frames` output frames on `solver`, calling `on_frame` with each finite frame
@@ -238,6 +281,10 @@ pub fn simulate(
             stats.seams_closed_frame = Some(frame);
         }
         on_frame(frame, &state)?;
+        if frame == prep.attach_frames && !prep.attached.is_empty() {
+            release(prep, solver, state)?;
+            stats.released_after_frame = Some(frame);
+        }
         if let Some(threshold) = prep.settle_ke_per_particle {
             let per_particle = stats.kinetic_energy_j / free;
             if per_particle < threshold as f64 {

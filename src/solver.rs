@@ -37,6 +37,8 @@ pub trait Solver {
     fn advance(&mut self, steps: &[SubstepParams]) -> Result<(), Error>;
     /// Reads positions and velocities back.
     fn state(&mut self) -> Result<ParticleState, Error>;
+    /// Replaces positions (w = inverse mass) and velocities, e.g. to release attachments.
+    fn set_state(&mut self, state: &ParticleState);
     /// Waits until submitted work has finished, without reading anything back (for timing).
     fn finish(&mut self) -> Result<(), Error> {
         Ok(())

@@ -129,14 +129,6 @@ impl CpuSolver {
             Pass::Integrate => integrate(p, &mut self.pos, &mut self.vel, &mut self.force),
         }
     }
-
-    /// Replaces positions and velocities (and clears forces), e.g. to start parity tests from
-    /// one recorded state.
-    pub fn set_state(&mut self, state: &ParticleState) {
-        self.pos.clone_from(&state.positions);
-        self.vel.clone_from(&state.velocities);
-        self.force.fill(Vec4::ZERO);
-    }
 }
 
 impl Solver for CpuSolver {
@@ -155,6 +147,13 @@ impl Solver for CpuSolver {
             }
         }
         Ok(())
+    }
+
+    /// Replaces positions and velocities and clears forces.
+    fn set_state(&mut self, state: &ParticleState) {
+        self.pos.clone_from(&state.positions);
+        self.vel.clone_from(&state.velocities);
+        self.force.fill(Vec4::ZERO);
     }
 
     fn state(&mut self) -> Result<ParticleState, Error> {

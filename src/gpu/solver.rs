@@ -330,16 +330,6 @@ impl GpuSolver {
         Ok(())
     }
 
-    /// Uploads positions and velocities and clears forces.
-    pub fn set_state(&mut self, state: &ParticleState) {
-        let q = &self.ctx.queue;
-        self.pos[self.current].write(q, bytemuck::cast_slice(&state.positions));
-        self.vel[self.current].write(q, bytemuck::cast_slice(&state.velocities));
-        for f in &self.forces {
-            f.write(q, &[]);
-        }
-    }
-
     /// Reads back the forces the last force stage wrote (for per-stage parity tests).
     pub fn forces(&mut self) -> Result<Vec<Vec4>, Error> {
         Ok(self.read_back(&[&self.forces[self.last_forces]])?.remove(0))
@@ -520,6 +510,16 @@ impl Solver for GpuSolver {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| Error::Gpu(format!("waiting for the GPU failed: {e}")))?;
         Ok(())
+    }
+
+    /// Replaces positions and velocities and clears forces.
+    fn set_state(&mut self, state: &ParticleState) {
+        let q = &self.ctx.queue;
+        self.pos[self.current].write(q, bytemuck::cast_slice(&state.positions));
+        self.vel[self.current].write(q, bytemuck::cast_slice(&state.velocities));
+        for f in &self.forces {
+            f.write(q, &[]);
+        }
     }
 
     fn state(&mut self) -> Result<ParticleState, Error> {

@@ -39,6 +39,17 @@ pub struct SeamPair {
     pub stitch: u32,
 }
 
+/// A bending hinge across a seam: edge `v[0]`→`v[1]` on the first panel, `v[2]` the opposite
+/// vertex of its boundary triangle there, `v[3]` the opposite vertex on the other panel. Its
+/// layout matches `Hinge::v`, so that a positive angle folds convex outward.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SeamHinge {
+    /// Shared edge (first panel) and the two opposite vertices.
+    pub v: [u32; 4],
+    /// Which stitch of the pattern.
+    pub stitch: u32,
+}
+
 /// The assembled cloth.
 #[derive(Clone, Debug)]
 pub struct Garment {
@@ -52,6 +63,24 @@ pub struct Garment {
     pub seam_pairs: Vec<SeamPair>,
     /// Number of stitches (seams).
     pub stitches: usize,
+    /// Hinges across every seam segment.
+    pub seam_hinges: Vec<SeamHinge>,
+    /// Each edge's label, per panel.
+    pub edge_labels: Vec<Vec<Option<String>>>,
+}
+
+impl Garment {
+    /// The particles on edges labelled with any of `labels`, sorted and unique.
+    pub fn particles_on_labelled_edges(&self, labels: &[String]) -> Vec<u32> {
+        let mut ids: Vec<u32> = (self.edge_labels.iter().zip(&self.edge_particles))
+            .flat_map(|(panel_labels, panel_edges)| panel_labels.iter().zip(panel_edges))
+            .filter(|(label, _)| label.as_ref().is_some_and(|l| labels.contains(l)))
+            .flat_map(|(_, ids)| ids.iter().copied())
+            .collect();
+        ids.sort_unstable();
+        ids.dedup();
+        ids
+    }
 }
 
 impl Garment {
@@ -145,7 +174,15 @@ impl Garment {
                     .collect(),
             );
         }
+        // Each directed boundary edge (a→b in its triangle's winding) and its opposite vertex.
+        let mut opposite: HashMap<(u32, u32), u32> = HashMap::new();
+        for t in &triangles {
+            for k in 0..3 {
+                opposite.insert((t[k], t[(k + 1) % 3]), t[(k + 2) % 3]);
+            }
+        }
         let mut seam_pairs = Vec::new();
+        let mut seam_hinges = Vec::new();
         for (k, s) in pattern.stitches.iter().enumerate() {
             let along = |e: EdgeRef| edge_particles[e.panel][e.edge].clone();
             let mut first = along(s.sides[0]);
@@ -154,6 +191,31 @@ impl Garment {
             }
             let second = along(s.sides[1]);
             seam_pairs.extend(pair_edges(&first, &second, &uv, k as u32));
+            // Both edges have the same count, so segment j of one faces segment j of the other.
+            for j in 0..first
+                .len()
+                .saturating_sub(1)
+                .min(second.len().saturating_sub(1))
+            {
+                let (a0, a1, b0, b1) = (first[j], first[j + 1], second[j], second[j + 1]);
+                let hinge = match (opposite.get(&(a0, a1)), opposite.get(&(a1, a0))) {
+                    (Some(&o1), _) => opposite
+                        .get(&(b1, b0))
+                        .or(opposite.get(&(b0, b1)))
+                        .map(|&o2| [a0, a1, o1, o2]),
+                    (None, Some(&o1)) => opposite
+                        .get(&(b0, b1))
+                        .or(opposite.get(&(b1, b0)))
+                        .map(|&o2| [a1, a0, o1, o2]),
+                    _ => None,
+                };
+                if let Some(v) = hinge {
+                    seam_hinges.push(SeamHinge {
+                        v,
+                        stitch: k as u32,
+                    });
+                }
+            }
         }
         Ok(Garment {
             mesh: TriMesh {
@@ -164,6 +226,10 @@ impl Garment {
             edge_particles,
             seam_pairs,
             stitches: pattern.stitches.len(),
+            seam_hinges,
+            edge_labels: (pattern.panels.iter())
+                .map(|p| p.edges.iter().map(|e| e.label.clone()).collect())
+                .collect(),
         })
     }
 }
