@@ -225,8 +225,8 @@ impl ClothModel {
         let mut pairs = Vec::with_capacity(3 * self.seams.len());
         for (k, s) in self.seams.iter().enumerate() {
             let shares = [1.0, 1.0 - s.weight, s.weight];
-            for role in 0..3 {
-                if shares[role] != 0.0 {
+            for (role, share) in shares.into_iter().enumerate() {
+                if share != 0.0 {
                     pairs.push((s.v[role], (k * 4 + role) as u32));
                 }
             }
@@ -274,9 +274,9 @@ impl ClothModel {
         // point: its stiffness matrix k·g·gᵀ with g = (1, −(1−w), −w) has row sums 2k·g_i.
         for s in &self.seams {
             let shares = [1.0, 1.0 - s.weight, s.weight];
-            for role in 0..3 {
-                k_sum[s.v[role] as usize] += shares[role] * s.stiffness;
-                c_sum[s.v[role] as usize] += shares[role] * s.damping;
+            for (&v, share) in s.v.iter().zip(shares) {
+                k_sum[v as usize] += share * s.stiffness;
+                c_sum[v as usize] += share * s.damping;
             }
         }
         for h in &self.hinges {

@@ -3,7 +3,7 @@
 use crate::error::Error;
 use crate::sim::Settled;
 use crate::solver::AdapterReport;
-use glam::Vec4;
+use glam::{Vec2, Vec4};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -22,14 +22,26 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
 }
 
 /// A Wavefront OBJ of the cloth at one frame (positions in m).
-pub fn obj_text(positions: &[Vec4], triangles: &[[u32; 3]]) -> String {
+pub fn obj_text(positions: &[Vec4], triangles: &[[u32; 3]], uv: Option<&[Vec2]>) -> String {
     let mut s = String::with_capacity(positions.len() * 40 + triangles.len() * 24);
-    s.push_str("# drapekit frame, units: m\n");
+    s.push_str("# drapekit frame, units: m");
+    s.push_str(if uv.is_some() {
+        "; vt: pattern coordinates in m\n"
+    } else {
+        "\n"
+    });
     for p in positions {
         let _ = writeln!(s, "v {} {} {}", p.x, p.y, p.z);
     }
+    for t in uv.unwrap_or_default() {
+        let _ = writeln!(s, "vt {} {}", t.x, t.y);
+    }
     for t in triangles {
-        let _ = writeln!(s, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1);
+        let [a, b, c] = t.map(|i| i + 1);
+        let _ = match uv {
+            Some(_) => writeln!(s, "f {a}/{a} {b}/{b} {c}/{c}"),
+            None => writeln!(s, "f {a} {b} {c}"),
+        };
     }
     s
 }
@@ -89,6 +101,10 @@ pub struct Summary {
     pub max_seam_gap_m: Option<f32>,
     /// The first output frame at which every seam was closed.
     pub seams_closed_frame: Option<u32>,
+    /// Particles held by `attach_labels` at the start.
+    pub attached_particles: usize,
+    /// The frame after which they were released.
+    pub released_after_frame: Option<u32>,
     /// Whether every frame was finite.
     pub finite: bool,
     /// Set when the settle rule stopped the run early.

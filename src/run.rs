@@ -102,12 +102,13 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
     let mut outputs = Vec::new();
     let mut stats = RunStats::default();
     let every = scene.output.every;
+    let uv = prep.garment.as_ref().map(|g| &g.uv[..]);
     let result = simulate(&prep, solver.as_mut(), &mut stats, |frame, state| {
         if scene.output.obj && frame % every == 0 {
             let name = format!("frame_{frame:04}.obj");
             write_atomic(
                 &out_dir.join(&name),
-                obj_text(&state.positions, &prep.model.triangles).as_bytes(),
+                obj_text(&state.positions, &prep.model.triangles, uv).as_bytes(),
             )?;
             outputs.push(name);
         }
@@ -152,6 +153,8 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
             .count(),
         max_seam_gap_m: stats.seam_gaps.iter().copied().reduce(f32::max),
         seams_closed_frame: stats.seams_closed_frame,
+        attached_particles: prep.attached.len(),
+        released_after_frame: stats.released_after_frame,
         finite: stats.finite,
         settled: stats.settled.clone(),
         warnings: prep.warnings.clone(),

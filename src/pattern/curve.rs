@@ -52,7 +52,11 @@ impl Curve {
         right: bool,
     ) -> Option<Self> {
         let chord = (end - start).length();
-        if !(chord > 0.0) || !(radius.is_finite()) || radius < 0.5 * chord * (1.0 - 1e-9) {
+        if chord <= 0.0
+            || !chord.is_finite()
+            || !radius.is_finite()
+            || radius < 0.5 * chord * (1.0 - 1e-9)
+        {
             return None;
         }
         let left = perp(start, end) / chord; // unit normal, left of start→end
