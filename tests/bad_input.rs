@@ -73,7 +73,11 @@ fn every_bad_pattern_is_refused_cleanly() {
         let name = path.file_name().unwrap().to_str().unwrap().to_string();
         let expect = std::fs::read_to_string(path.with_extension("expect"))
             .unwrap_or_else(|_| panic!("{name} lacks its .expect file"));
-        let work = tempdir(&path);
+        // Not tempdir(): a bad scene may share this stem, and the two tests run in parallel.
+        let stem = path.file_stem().unwrap().to_str().unwrap();
+        let work =
+            std::env::temp_dir().join(format!("drapekit-badpattern-{}-{stem}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&work);
         std::fs::create_dir_all(&work).unwrap();
         let scene = work.join("scene.toml");
         let scene_text = format!(

@@ -213,3 +213,28 @@ fn bench_writes_tables_and_a_plot() {
     assert!(svg.starts_with("<svg") && svg.contains("particle-substeps / s"));
     assert!(dir.join("bench.md").exists());
 }
+
+#[test]
+fn tshirt_sew_writes_a_sewn_tshirt() {
+    // The acceptance run, shortened from 12 to 6 frames: the seams close by frame 4.
+    let out = out_dir("tshirt_sew");
+    let r = drapekit(&[
+        "run",
+        common::fixture("scenes/tshirt_sew.toml").to_str().unwrap(),
+        "--frames",
+        "6",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["seams"], 10);
+    assert_eq!(summary["seams_closed"], 10, "{summary:#}");
+    assert!(summary["max_seam_gap_m"].as_f64().unwrap() < 1e-3);
+    let obj = std::fs::read_to_string(out.join("frame_0004.obj")).unwrap();
+    assert!(
+        obj.contains("\nvt ") && obj.contains("/"),
+        "frames carry pattern coordinates"
+    );
+}
