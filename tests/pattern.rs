@@ -220,9 +220,40 @@ fn shipped_patterns_mesh_with_good_triangles() {
             let count = |e: drapekit::pattern::EdgeRef| g.edge_particles[e.panel][e.edge].len();
             assert_eq!(count(s.sides[0]), count(s.sides[1]), "{name}: stitch {k}");
         }
-        // Faces point outward: counter-clockwise panels face +z of their panel frame.
-        let area: f32 = m.triangles.iter().map(|t| m.triangle_area(*t)).sum();
-        assert!(area > 0.0);
+        // No points were added on the outline: the mesh's boundary edges are exactly the
+        // outline segments (one per sampled segment of every edge).
+        let outline_segments: usize = (0..p.panels.len())
+            .map(|pi| {
+                g.edge_particles[pi]
+                    .iter()
+                    .map(|e| e.len() - 1)
+                    .sum::<usize>()
+            })
+            .sum();
+        let boundary = edges.iter().filter(|e| e.opposite[1].is_none()).count();
+        assert_eq!(boundary, outline_segments, "{name}: boundary edges");
+        // Facing: each panel's triangles face away from the garment's centre (every shipped
+        // panel is placed on the outside of the garment it belongs to).
+        let centre = m.positions.iter().sum::<glam::Vec3>() / m.positions.len() as f32;
+        for (pi, panel) in p.panels.iter().enumerate() {
+            let first = g.edge_particles[pi][0][0];
+            let last = g
+                .edge_particles
+                .get(pi + 1)
+                .map_or(m.positions.len() as u32, |e| e[0][0]);
+            let (mut normal, mut centroid, mut count) = (glam::Vec3::ZERO, glam::Vec3::ZERO, 0.0);
+            for t in m.triangles.iter().filter(|t| (first..last).contains(&t[0])) {
+                let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                normal += (b - a).cross(c - a);
+                centroid += (a + b + c) / 3.0;
+                count += 1.0;
+            }
+            assert!(
+                normal.dot(centroid / count - centre) > 0.0,
+                "{name}: panel '{}' faces inward",
+                panel.name
+            );
+        }
     }
 }
 
@@ -490,4 +521,27 @@ fn a_scene_can_override_a_panel_placement() {
         "moved by {d}"
     );
     assert_eq!(first(&g, back), first(&spec, back));
+}
+
+#[test]
+fn facing_follows_the_loop_orientation() {
+    // The same square with its loop counter-clockwise and clockwise, both unrotated: the first
+    // faces +z, the second −z.
+    for (vertices, z_sign) in [
+        ("[[0, 0], [10, 0], [10, 10], [0, 10]]", 1.0f32),
+        ("[[0, 0], [0, 10], [10, 10], [10, 0]]", -1.0),
+    ] {
+        let json = format!(
+            r#"{{"pattern": {{"panels": {{"a": {{"translation": [0, 0, 0], "rotation": [0, 0, 0],
+                "vertices": {vertices}, "edges": [{{"endpoints": [0, 1]}}, {{"endpoints": [1, 2]}},
+                {{"endpoints": [2, 3]}}, {{"endpoints": [3, 0]}}]}}}}, "stitches": []}}}}"#
+        );
+        let p = Pattern::parse(&json, Path::new("square.json")).unwrap();
+        let m = build(&p, 0.02).mesh;
+        for t in &m.triangles {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            let nz = (b - a).cross(c - a).z;
+            assert!(nz * z_sign > 0.0, "loop {vertices}: a triangle faces {nz}");
+        }
+    }
 }
