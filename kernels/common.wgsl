@@ -24,6 +24,12 @@ struct SimParams {
     drag_coefficient: f32,       // 1, wind drag
     _pad0: u32,
     _pad1: u32,
+    sdf_origin: vec4<f32>,       // xyz: body-frame position of SDF node (0,0,0) in m, w: node spacing in m
+    sdf_dims: vec4<u32>,         // xyz: SDF nodes along x, y, z; w: unused
+    thickness: f32,              // m, collision thickness around the body
+    friction: f32,               // 1, Coulomb coefficient against the body
+    normal_loss: f32,            // 1, fraction of outward normal relative speed lost in contact
+    tangential_loss: f32,        // 1, fraction of tangential relative speed lost in contact
 }
 
 // Values that change per substep. One entry per substep of a frame, at a 256-byte stride,
@@ -34,6 +40,12 @@ struct SubstepParams {
     substep: u32,
     _pad0: u32,
     _pad1: u32,
+    body_x: vec4<f32>,           // body rotation, columns (body to world); w: unused
+    body_y: vec4<f32>,
+    body_z: vec4<f32>,
+    body_translation: vec4<f32>, // m
+    body_velocity: vec4<f32>,    // m/s of the body frame's origin
+    body_angular_velocity: vec4<f32>, // rad/s, world frame
 }
 
 // One incident spring seen from a particle (CSR entry): the spring is stored once per end.

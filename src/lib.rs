@@ -6,6 +6,7 @@
 #![warn(missing_docs)]
 
 pub mod bench;
+pub mod body;
 pub mod cpu;
 pub mod error;
 pub mod gpu;

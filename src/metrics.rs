@@ -50,3 +50,20 @@ pub fn seam_gaps(pairs: &[SeamPair], stitches: usize, positions: &[Vec4]) -> Vec
     }
     gaps
 }
+
+/// The deepest any particle lies inside the body, measured against the exact mesh, in m
+/// (0 when none is inside). `body` is the body's pose at the state's time.
+pub fn max_penetration(
+    collider: &crate::body::Collider,
+    body: &crate::body::motion::BodyState,
+    positions: &[Vec4],
+) -> f32 {
+    let inverse = body.rotation.inverse();
+    positions
+        .iter()
+        .map(|p| {
+            let local = inverse * (p.truncate() - body.translation);
+            (-collider.exact.query(local).0).max(0.0)
+        })
+        .fold(0.0, f32::max)
+}

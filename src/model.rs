@@ -50,6 +50,8 @@ pub struct ClothModel {
     pub hinges: Vec<Hinge>,
     /// Seam pairs (empty unless the cloth comes from a sewing pattern).
     pub seams: Vec<Seam>,
+    /// The collision body, if the scene has one.
+    pub collider: Option<std::sync::Arc<crate::body::Collider>>,
 }
 
 /// A compressed-sparse-row incidence list: `items[offsets[i]..offsets[i + 1]]` belong to particle i.
@@ -159,6 +161,7 @@ impl ClothModel {
             springs,
             hinges,
             seams: Vec::new(),
+            collider: None,
         }
     }
 

@@ -101,6 +101,16 @@ pub struct Summary {
     pub max_seam_gap_m: Option<f32>,
     /// The first output frame at which every seam was closed.
     pub seams_closed_frame: Option<u32>,
+    /// CPU contact strategy against the body (`null` without a body; the GPU uses the SDF).
+    pub collision_strategy: Option<&'static str>,
+    /// Deepest particle inside the body at any output frame, measured against the exact mesh.
+    pub max_penetration_m: Option<f32>,
+    /// The body's SDF: grid, bake time, memory, cache.
+    pub sdf: Option<crate::body::sdf::BakeReport>,
+    /// Fastest body surface point in m/s, and how far it moves in one substep in m.
+    pub body_surface_speed_m_s: Option<f32>,
+    /// Body surface travel per substep in m; at most the thickness unless a warning says so.
+    pub body_surface_step_m: Option<f32>,
     /// Particles held by `attach_labels` at the start.
     pub attached_particles: usize,
     /// The frame after which they were released.

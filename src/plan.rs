@@ -16,18 +16,21 @@ pub enum Pass {
     WindForces,
     /// Seam penalty springs between sewn edges.
     SeamForces,
-    /// Euler integration; always last.
+    /// Euler integration; after every force stage.
     Integrate,
+    /// Particle-versus-body collision through the body's SDF; after integration.
+    CollideBody,
 }
 
 impl Pass {
     /// Every stage, in execution order.
-    pub const ALL: [Pass; 5] = [
+    pub const ALL: [Pass; 6] = [
         Pass::SpringForces,
         Pass::BendingForces,
         Pass::WindForces,
         Pass::SeamForces,
         Pass::Integrate,
+        Pass::CollideBody,
     ];
 
     /// The stage name shared by the kernel file, the CPU twin, tests and bench ids.
@@ -38,12 +41,18 @@ impl Pass {
             Pass::WindForces => "wind_forces",
             Pass::SeamForces => "seam_forces",
             Pass::Integrate => "integrate",
+            Pass::CollideBody => "collide_body",
         }
     }
 
-    /// Whether the stage adds forces (all but `integrate`).
+    /// Whether the stage adds forces.
     pub fn is_force(self) -> bool {
-        self != Pass::Integrate
+        !self.writes_state()
+    }
+
+    /// Whether the stage writes positions and velocities (the next state).
+    pub fn writes_state(self) -> bool {
+        matches!(self, Pass::Integrate | Pass::CollideBody)
     }
 
     /// The stage's WGSL source, without `common.wgsl`.
@@ -54,6 +63,7 @@ impl Pass {
             Pass::WindForces => include_str!("../kernels/wind_forces.wgsl"),
             Pass::SeamForces => include_str!("../kernels/seam_forces.wgsl"),
             Pass::Integrate => include_str!("../kernels/integrate.wgsl"),
+            Pass::CollideBody => include_str!("../kernels/collide_body.wgsl"),
         }
     }
 }
@@ -65,6 +75,8 @@ pub struct Effects {
     pub bending: bool,
     /// A wind section is present.
     pub wind: bool,
+    /// A collision body is present.
+    pub body: bool,
 }
 
 /// The ordered passes of one substep.
@@ -83,6 +95,7 @@ impl PassPlan {
             Pass::WindForces => effects.wind && !model.triangles.is_empty(),
             Pass::SeamForces => !model.seams.is_empty(),
             Pass::Integrate => true,
+            Pass::CollideBody => effects.body && model.collider.is_some(),
         };
         PassPlan {
             passes: Pass::ALL.into_iter().filter(wanted).collect(),

@@ -153,6 +153,26 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
             .count(),
         max_seam_gap_m: stats.seam_gaps.iter().copied().reduce(f32::max),
         seams_closed_frame: stats.seams_closed_frame,
+        collision_strategy: prep.model.collider.as_ref().map(|c| {
+            if solver.backend_name() == "gpu" {
+                "sdf"
+            } else {
+                c.strategy.name()
+            }
+        }),
+        max_penetration_m: prep
+            .model
+            .collider
+            .as_ref()
+            .map(|_| stats.max_penetration_m),
+        sdf: prep.model.collider.as_ref().map(|c| c.bake.clone()),
+        body_surface_speed_m_s: prep
+            .model
+            .collider
+            .as_ref()
+            .map(|_| prep.body_surface_speed),
+        body_surface_step_m: (prep.model.collider.as_ref())
+            .map(|_| prep.body_surface_speed * prep.params.dt),
         attached_particles: prep.attached.len(),
         released_after_frame: stats.released_after_frame,
         finite: stats.finite,

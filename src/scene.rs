@@ -23,6 +23,7 @@ struct RawScene {
     #[serde(default)]
     world: RawWorld,
     wind: Option<RawWind>,
+    body: Option<crate::body::settings::RawBody>,
     solver: RawSolver,
     #[serde(default)]
     output: RawOutput,
@@ -395,6 +396,8 @@ pub struct Scene {
     pub air_damping: f32,
     /// Wind, if any.
     pub wind: Option<Wind>,
+    /// The collision body, if any.
+    pub body: Option<crate::body::settings::BodySettings>,
     /// Solver settings.
     pub solver: SolverSettings,
     /// Output settings.
@@ -440,13 +443,13 @@ fn key_line(src: &str, table: &str, key: &str) -> Option<usize> {
 }
 
 /// Validation context: the file and its text, for locations.
-struct Checker<'a> {
-    path: &'a Path,
-    src: &'a str,
+pub(crate) struct Checker<'a> {
+    pub(crate) path: &'a Path,
+    pub(crate) src: &'a str,
 }
 
 impl Checker<'_> {
-    fn err(
+    pub(crate) fn err(
         &self,
         table: &str,
         key: &str,
@@ -461,7 +464,7 @@ impl Checker<'_> {
         InputError::new(self.path, location, problem, fix).at_line(key_line(self.src, table, key))
     }
 
-    fn finite(&self, table: &str, key: &str, v: f64) -> Result<f32, InputError> {
+    pub(crate) fn finite(&self, table: &str, key: &str, v: f64) -> Result<f32, InputError> {
         if !v.is_finite() {
             return Err(self.err(
                 table,
@@ -473,7 +476,13 @@ impl Checker<'_> {
         Ok(v as f32)
     }
 
-    fn positive(&self, table: &str, key: &str, v: f64, unit: &str) -> Result<f32, InputError> {
+    pub(crate) fn positive(
+        &self,
+        table: &str,
+        key: &str,
+        v: f64,
+        unit: &str,
+    ) -> Result<f32, InputError> {
         let x = self.finite(table, key, v)?;
         if v <= 0.0 {
             return Err(self.err(
@@ -486,7 +495,13 @@ impl Checker<'_> {
         Ok(x)
     }
 
-    fn non_negative(&self, table: &str, key: &str, v: f64, unit: &str) -> Result<f32, InputError> {
+    pub(crate) fn non_negative(
+        &self,
+        table: &str,
+        key: &str,
+        v: f64,
+        unit: &str,
+    ) -> Result<f32, InputError> {
         let x = self.finite(table, key, v)?;
         if v < 0.0 {
             return Err(self.err(
@@ -499,7 +514,7 @@ impl Checker<'_> {
         Ok(x)
     }
 
-    fn vec3(&self, table: &str, key: &str, v: [f64; 3]) -> Result<Vec3, InputError> {
+    pub(crate) fn vec3(&self, table: &str, key: &str, v: [f64; 3]) -> Result<Vec3, InputError> {
         let mut out = [0.0f32; 3];
         for (o, x) in out.iter_mut().zip(v) {
             *o = self.finite(table, key, x)?;
@@ -507,7 +522,13 @@ impl Checker<'_> {
         Ok(Vec3::from(out))
     }
 
-    fn count(&self, table: &str, key: &str, v: i64, min: i64) -> Result<u32, InputError> {
+    pub(crate) fn count(
+        &self,
+        table: &str,
+        key: &str,
+        v: i64,
+        min: i64,
+    ) -> Result<u32, InputError> {
         if v < min || v > u32::MAX as i64 {
             return Err(self.err(
                 table,
@@ -888,6 +909,10 @@ impl Scene {
             gravity,
             air_damping,
             wind,
+            body: match &raw.body {
+                Some(b) => Some(crate::body::settings::parse(&c, base, b)?),
+                None => None,
+            },
             solver,
             output,
         })
@@ -913,6 +938,7 @@ impl Scene {
         Effects {
             bending: self.fabric.bending_stiffness.is_some(),
             wind: self.wind.is_some(),
+            body: self.body.is_some(),
         }
     }
 
@@ -1064,6 +1090,13 @@ impl Scene {
             pinned.extend(self.attached_particles(g)?);
         }
         let mut model = ClothModel::from_mesh(&mesh, &self.fabric, &pinned);
+        if let Some(b) = &self.body {
+            let c = Checker {
+                path: &self.path,
+                src: &self.source,
+            };
+            model.collider = Some(std::sync::Arc::new(b.collider(&c)?));
+        }
         if let (
             Some(g),
             ClothSource::Pattern {

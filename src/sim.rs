@@ -1,6 +1,7 @@
 //! From a scene to a prepared run (model, plan, substeps), and the frame loop shared by both
 //! backends: one `advance` per output frame, one readback per output frame.
 
+use crate::body::motion::BodyState;
 use crate::error::Error;
 use crate::gpu::layout::{SimParams, SubstepParams};
 use crate::metrics;
@@ -50,9 +51,19 @@ pub struct Prepared {
     pub attach_frames: u32,
     /// Particles the scene's `[[pins]]` hold for the whole run.
     pub scene_pins: Vec<u32>,
+    /// Fastest speed of any body surface point, in m/s (0 without a moving body).
+    pub body_surface_speed: f32,
 }
 
 impl Prepared {
+    /// The body's pose and velocity at time `t` (at rest at the origin without a body).
+    pub fn body_state(&self, t: f32) -> BodyState {
+        self.model
+            .collider
+            .as_ref()
+            .map_or(BodyState::REST, |c| c.motion.at(t))
+    }
+
     /// Hinges the plan actually simulates (0 when bending is off).
     pub fn hinges_in_use(&self) -> usize {
         if self.plan.contains(crate::plan::Pass::BendingForces) {
@@ -135,8 +146,35 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
             (n as u32, true)
         }
     };
+    // Tunnelling: no body surface point may move more than the thickness in one substep.
+    let mut substeps = substeps;
+    let mut body_surface_speed = 0.0f32;
+    if let Some(c) = &model.collider {
+        let radius = c
+            .body
+            .mesh
+            .positions
+            .iter()
+            .map(|p| p.length())
+            .fold(0.0, f32::max);
+        body_surface_speed = c.motion.max_surface_speed(radius);
+        let thickness = scene.body.as_ref().map_or(f32::INFINITY, |b| b.thickness);
+        let needed = (body_surface_speed * frame_dt / thickness).ceil() as u32;
+        if needed > substeps {
+            if auto_substeps {
+                substeps = needed;
+            } else {
+                warnings.push(format!(
+                    "the body's surface moves up to {:.2e} m per substep, more than the                      thickness {thickness:.2e} m: particles may tunnel (use substeps = {needed} or \"auto\")",
+                    body_surface_speed * frame_dt / substeps as f32
+                ));
+            }
+        }
+    }
     let dt = frame_dt / substeps as f32;
     let wind = scene.wind;
+    let body = scene.body.as_ref();
+    let sdf = model.collider.as_ref().map(|c| &c.sdf);
     let params = SimParams {
         gravity: scene.gravity.extend(0.0).to_array(),
         num_particles: model.len() as u32,
@@ -147,6 +185,12 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         drag_coefficient: wind.map_or(0.0, |w| w.drag_coefficient),
         _pad0: 0,
         _pad1: 0,
+        sdf_origin: sdf.map_or([0.0, 0.0, 0.0, 1.0], |g| g.origin.extend(g.cell).to_array()),
+        sdf_dims: sdf.map_or([0; 4], |g| [g.dims[0], g.dims[1], g.dims[2], 0]),
+        thickness: body.map_or(0.0, |b| b.thickness),
+        friction: body.map_or(0.0, |b| b.friction),
+        normal_loss: body.map_or(0.0, |b| b.normal_loss),
+        tangential_loss: body.map_or(0.0, |b| b.tangential_loss),
     };
     Ok(Prepared {
         model,
@@ -165,6 +209,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         scene_pins,
         attached,
         attach_frames,
+        body_surface_speed,
     })
 }
 
@@ -175,12 +220,21 @@ pub fn substep_params(prep: &Prepared, frame: u32) -> Vec<SubstepParams> {
             let t = ((frame - 1) as f64 * prep.frame_dt as f64 + s as f64 * prep.params.dt as f64)
                 as f32;
             let wind = prep.wind.map_or(glam::Vec3::ZERO, |w| w.at(t));
+            // The body's pose at the end of the substep, where collision is resolved.
+            let body = prep.body_state(t + prep.params.dt);
+            let r = glam::Mat3::from_quat(body.rotation);
             SubstepParams {
                 wind: wind.extend(0.0).to_array(),
                 time: t,
                 substep: s,
                 _pad0: 0,
                 _pad1: 0,
+                body_x: r.x_axis.extend(0.0).to_array(),
+                body_y: r.y_axis.extend(0.0).to_array(),
+                body_z: r.z_axis.extend(0.0).to_array(),
+                body_translation: body.translation.extend(0.0).to_array(),
+                body_velocity: body.linear_velocity.extend(0.0).to_array(),
+                body_angular_velocity: body.angular_velocity.extend(0.0).to_array(),
             }
         })
         .collect()
@@ -218,6 +272,8 @@ pub struct RunStats {
     pub seams_closed_frame: Option<u32>,
     /// The frame after which attached particles were released.
     pub released_after_frame: Option<u32>,
+    /// Deepest particle inside the body at any output frame, against the exact mesh, in m.
+    pub max_penetration_m: f32,
 }
 
 /// Gives attached particles their inverse mass back (pins from the scene stay pinned).
@@ -276,6 +332,11 @@ pub fn simulate(
         ));
         stats.kinetic_energy_j = metrics::kinetic_energy(&prep.model, &state);
         stats.seam_gaps = seam_gaps(&state);
+        if let Some(c) = &prep.model.collider {
+            let body = prep.body_state(frame as f32 * prep.frame_dt);
+            let depth = metrics::max_penetration(c, &body, &state.positions);
+            stats.max_penetration_m = stats.max_penetration_m.max(depth);
+        }
         let all_closed = stats.seam_gaps.iter().all(|&g| g < prep.seam_closed_gap);
         if !stats.seam_gaps.is_empty() && all_closed && stats.seams_closed_frame.is_none() {
             stats.seams_closed_frame = Some(frame);

@@ -2,7 +2,7 @@
 //! every field offset, as naga lays the WGSL structs out.
 
 use drapekit::gpu::kernels::{validate_wgsl, COMMON_WGSL};
-use drapekit::gpu::layout::{Hinge, SimParams, SpringRef, SubstepParams};
+use drapekit::gpu::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams};
 use std::mem::{offset_of, size_of};
 
 fn wgsl_layout(name: &str) -> (u32, Vec<(String, u32)>) {
@@ -46,6 +46,12 @@ fn sim_params_layout() {
             ("drag_coefficient", offset_of!(SimParams, drag_coefficient)),
             ("_pad0", offset_of!(SimParams, _pad0)),
             ("_pad1", offset_of!(SimParams, _pad1)),
+            ("sdf_origin", offset_of!(SimParams, sdf_origin)),
+            ("sdf_dims", offset_of!(SimParams, sdf_dims)),
+            ("thickness", offset_of!(SimParams, thickness)),
+            ("friction", offset_of!(SimParams, friction)),
+            ("normal_loss", offset_of!(SimParams, normal_loss)),
+            ("tangential_loss", offset_of!(SimParams, tangential_loss)),
         ],
     );
 }
@@ -61,6 +67,18 @@ fn substep_params_layout() {
             ("substep", offset_of!(SubstepParams, substep)),
             ("_pad0", offset_of!(SubstepParams, _pad0)),
             ("_pad1", offset_of!(SubstepParams, _pad1)),
+            ("body_x", offset_of!(SubstepParams, body_x)),
+            ("body_y", offset_of!(SubstepParams, body_y)),
+            ("body_z", offset_of!(SubstepParams, body_z)),
+            (
+                "body_translation",
+                offset_of!(SubstepParams, body_translation),
+            ),
+            ("body_velocity", offset_of!(SubstepParams, body_velocity)),
+            (
+                "body_angular_velocity",
+                offset_of!(SubstepParams, body_angular_velocity),
+            ),
         ],
     );
 }
@@ -75,6 +93,21 @@ fn spring_ref_layout() {
             ("rest_length", offset_of!(SpringRef, rest_length)),
             ("stiffness", offset_of!(SpringRef, stiffness)),
             ("damping", offset_of!(SpringRef, damping)),
+        ],
+    );
+}
+
+#[test]
+fn seam_layout() {
+    check(
+        "Seam",
+        size_of::<Seam>(),
+        &[
+            ("v", offset_of!(Seam, v)),
+            ("weight", offset_of!(Seam, weight)),
+            ("stiffness", offset_of!(Seam, stiffness)),
+            ("damping", offset_of!(Seam, damping)),
+            ("_pad0", offset_of!(Seam, _pad0)),
         ],
     );
 }
@@ -123,4 +156,5 @@ fn structs_stored_in_texels_fill_whole_texels() {
     // unpack_spring and unpack_hinge read one and two rgba32uint texels (16 bytes each).
     assert_eq!(size_of::<SpringRef>(), 16);
     assert_eq!(size_of::<Hinge>(), 32);
+    assert_eq!(size_of::<Seam>(), 32);
 }

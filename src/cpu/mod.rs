@@ -2,12 +2,14 @@
 //! same data, single-threaded so that it is the readable definition of the physics.
 
 mod bending_forces;
+mod collide_body;
 mod integrate;
 mod seam_forces;
 mod spring_forces;
 mod wind_forces;
 
 pub use bending_forces::{bending_forces, hinge_force};
+pub use collide_body::{collide_body, collide_particle, sdf_sample, SDF_FAR};
 pub use integrate::integrate;
 pub use seam_forces::{seam_force, seam_forces};
 pub use spring_forces::spring_forces;
@@ -34,6 +36,7 @@ pub struct CpuSolver {
     hinges: Option<(Vec<Hinge>, Csr<u32>)>,
     triangles: Option<(Vec<[u32; 4]>, Csr<u32>)>,
     seams: Option<(Vec<Seam>, Csr<u32>)>,
+    collider: Option<std::sync::Arc<crate::body::Collider>>,
 }
 
 impl CpuSolver {
@@ -58,6 +61,11 @@ impl CpuSolver {
             seams: plan
                 .contains(Pass::SeamForces)
                 .then(|| (model.seams.clone(), model.seam_csr())),
+            collider: if plan.contains(Pass::CollideBody) {
+                model.collider.clone()
+            } else {
+                None
+            },
         }
     }
 
@@ -126,7 +134,49 @@ impl CpuSolver {
                     seams,
                 );
             }
+            Pass::CollideBody => {
+                let c = self
+                    .collider
+                    .as_ref()
+                    .expect("collide_body is not in the plan");
+                self.collide(c.clone(), step);
+            }
             Pass::Integrate => integrate(p, &mut self.pos, &mut self.vel, &mut self.force),
+        }
+    }
+}
+
+impl CpuSolver {
+    /// The collision stage with the body's CPU strategy: the SDF (the GPU's twin) or exact
+    /// queries, all driving the same response.
+    fn collide(&mut self, c: std::sync::Arc<crate::body::Collider>, step: &SubstepParams) {
+        use crate::body::Strategy;
+        let p = &self.params;
+        match c.strategy {
+            Strategy::Sdf => collide_body(p, step, &mut self.pos, &mut self.vel, &c.sdf.values),
+            Strategy::Exact | Strategy::Brute => {
+                let query = |x: glam::Vec3| {
+                    let (phi, nearest) = match c.strategy {
+                        Strategy::Exact => c.exact.query(x),
+                        _ => crate::body::brute_query(&c.body.mesh, x),
+                    };
+                    // ∇φ points away from the surface outside and towards it inside.
+                    let d = x - nearest;
+                    let len = d.length();
+                    let grad = if len > 0.0 {
+                        d / len * phi.signum()
+                    } else {
+                        glam::Vec3::ZERO
+                    };
+                    grad.extend(phi)
+                };
+                for i in 0..p.num_particles as usize {
+                    let (x, v) =
+                        collide_particle(p, step, self.pos[i], self.vel[i].truncate(), query);
+                    self.pos[i] = x;
+                    self.vel[i] = v.extend(0.0);
+                }
+            }
         }
     }
 }

@@ -25,6 +25,18 @@ pub struct SimParams {
     pub _pad0: u32,
     /// Padding to a 16-byte multiple.
     pub _pad1: u32,
+    /// Body-frame position of SDF node (0, 0, 0) in m (xyz); w: node spacing in m.
+    pub sdf_origin: [f32; 4],
+    /// SDF nodes along x, y, z; w unused.
+    pub sdf_dims: [u32; 4],
+    /// Collision thickness in m.
+    pub thickness: f32,
+    /// Coulomb friction coefficient against the body.
+    pub friction: f32,
+    /// Fraction of outward normal relative speed lost in contact.
+    pub normal_loss: f32,
+    /// Fraction of tangential relative speed lost in contact.
+    pub tangential_loss: f32,
 }
 
 /// Per-substep values (WGSL `SubstepParams`), one per substep at a 256-byte stride.
@@ -41,6 +53,18 @@ pub struct SubstepParams {
     pub _pad0: u32,
     /// Padding.
     pub _pad1: u32,
+    /// Body rotation (body to world), first column; w unused.
+    pub body_x: [f32; 4],
+    /// Second column.
+    pub body_y: [f32; 4],
+    /// Third column.
+    pub body_z: [f32; 4],
+    /// Body translation in m.
+    pub body_translation: [f32; 4],
+    /// Velocity of the body frame's origin in m/s.
+    pub body_velocity: [f32; 4],
+    /// Body angular velocity in rad/s (world frame).
+    pub body_angular_velocity: [f32; 4],
 }
 
 /// One spring seen from one of its ends (WGSL `SpringRef`).

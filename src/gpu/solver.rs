@@ -17,7 +17,7 @@ use crate::solver::{AdapterReport, ParticleState, Solver};
 use glam::Vec4;
 use std::num::NonZeroU64;
 use wgpu::util::DeviceExt;
-use wgpu::TextureFormat::{R32Uint, Rgba32Float, Rgba32Uint};
+use wgpu::TextureFormat::{R32Float, R32Uint, Rgba32Float, Rgba32Uint};
 
 /// One binding of a stage; the layout entry and the bind group entry come from the same value.
 #[derive(Clone, Copy)]
@@ -108,7 +108,7 @@ impl GpuSolver {
             mapped_at_creation: false,
         });
 
-        let needs_substep = plan.contains(Pass::WindForces);
+        let needs_substep = plan.contains(Pass::WindForces) || plan.contains(Pass::CollideBody);
         let substeps = needs_substep.then(|| {
             labels.push("substep_params");
             let align = ctx.device.limits().min_uniform_buffer_offset_alignment as u64;
@@ -170,6 +170,10 @@ impl GpuSolver {
                     add("seam_refs", R32Uint, bytemuck::cast_slice(&csr.items))?;
                     add("seams", Rgba32Uint, bytemuck::cast_slice(&model.seams))?;
                 }
+                Pass::CollideBody => {
+                    let c = model.collider.as_ref().expect("collide_body needs a body");
+                    add("sdf", R32Float, bytemuck::cast_slice(&c.sdf.values))?;
+                }
                 Pass::Integrate => {}
             }
             let (force_out, force_in) = if pass.is_force() {
@@ -220,6 +224,17 @@ impl GpuSolver {
                         o(0),
                         o(1),
                         o(2),
+                    ],
+                    Pass::CollideBody => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::SubstepUniform(
+                            substep_buf.expect("collision needs substep params"),
+                        ),
+                        Binding::Read(&pos[p]),
+                        Binding::Read(&vel[p]),
+                        o(0),
+                        Binding::Write(&pos[1 - p]),
+                        Binding::Write(&vel[1 - p]),
                     ],
                     Pass::Integrate => vec![
                         Binding::Uniform(&params_buf),
@@ -319,7 +334,7 @@ impl GpuSolver {
                         if let Some(out) = stage.force_out {
                             self.last_forces = out;
                         }
-                        if pass == Pass::Integrate {
+                        if pass.writes_state() {
                             self.current = 1 - self.current;
                         }
                     }

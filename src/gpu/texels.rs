@@ -12,7 +12,7 @@ pub struct TexelArray {
     pub texture: wgpu::Texture,
     /// Its only view.
     pub view: wgpu::TextureView,
-    /// Texel format: Rgba32Float, Rgba32Uint or R32Uint.
+    /// Texel format: Rgba32Float, R32Float, Rgba32Uint or R32Uint.
     pub format: wgpu::TextureFormat,
     rows: u32,
 }
@@ -135,7 +135,7 @@ impl TexelArray {
     /// How a kernel reads this array: `texture_2d<f32>` or `texture_2d<u32>`.
     pub fn sample_type(&self) -> wgpu::TextureSampleType {
         match self.format {
-            wgpu::TextureFormat::Rgba32Float => {
+            wgpu::TextureFormat::Rgba32Float | wgpu::TextureFormat::R32Float => {
                 wgpu::TextureSampleType::Float { filterable: false }
             }
             _ => wgpu::TextureSampleType::Uint,

@@ -1,0 +1,115 @@
+//! Rigid body motion from keyframes: translation interpolated linearly, rotation by slerp.
+//! Velocities are those of the interpolation (constant within a segment).
+
+use glam::{Quat, Vec3};
+
+/// A body pose at a time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Keyframe {
+    /// Time in s.
+    pub time: f32,
+    /// Translation of the body frame in m.
+    pub translation: Vec3,
+    /// Rotation of the body frame.
+    pub rotation: Quat,
+}
+
+/// Where the body is and how it moves at one instant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyState {
+    /// Rotation, body to world.
+    pub rotation: Quat,
+    /// Translation, body to world, in m.
+    pub translation: Vec3,
+    /// Velocity of the body frame's origin in m/s.
+    pub linear_velocity: Vec3,
+    /// Angular velocity in rad/s (world frame).
+    pub angular_velocity: Vec3,
+}
+
+impl BodyState {
+    /// The body at rest at the origin.
+    pub const REST: BodyState = BodyState {
+        rotation: Quat::IDENTITY,
+        translation: Vec3::ZERO,
+        linear_velocity: Vec3::ZERO,
+        angular_velocity: Vec3::ZERO,
+    };
+}
+
+/// Keyframed rigid motion; before the first and after the last keyframe the body holds still.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Motion {
+    /// Keyframes sorted by time.
+    pub keys: Vec<Keyframe>,
+}
+
+impl Motion {
+    /// "Turn right, then left": rotate about the vertical axis to −`angle_deg` (right, seen from
+    /// above) over `period` s, over to +`angle_deg` over 2·`period`, and back over `period`.
+    pub fn turn_right_left(angle_deg: f32, period: f32, start: f32) -> Motion {
+        let yaw = |deg: f32| Quat::from_rotation_y(deg.to_radians());
+        let key = |time: f32, deg: f32| Keyframe {
+            time,
+            translation: Vec3::ZERO,
+            rotation: yaw(deg),
+        };
+        Motion {
+            keys: vec![
+                key(start, 0.0),
+                key(start + period, -angle_deg),
+                key(start + 2.0 * period, 0.0),
+                key(start + 3.0 * period, angle_deg),
+                key(start + 4.0 * period, 0.0),
+            ],
+        }
+    }
+
+    /// The body's pose and velocity at time `t`.
+    pub fn at(&self, t: f32) -> BodyState {
+        let Some(first) = self.keys.first() else {
+            return BodyState::REST;
+        };
+        let hold = |k: &Keyframe| BodyState {
+            rotation: k.rotation,
+            translation: k.translation,
+            linear_velocity: Vec3::ZERO,
+            angular_velocity: Vec3::ZERO,
+        };
+        if t <= first.time {
+            return hold(first);
+        }
+        for w in self.keys.windows(2) {
+            let (a, b) = (&w[0], &w[1]);
+            if t < b.time {
+                let span = b.time - a.time;
+                let f = (t - a.time) / span;
+                // Shortest-arc rotation from a to b, as an angular velocity over the segment.
+                let mut delta = b.rotation * a.rotation.inverse();
+                if delta.w < 0.0 {
+                    delta = -delta;
+                }
+                let (axis, angle) = delta.to_axis_angle();
+                return BodyState {
+                    rotation: a.rotation.slerp(b.rotation, f),
+                    translation: a.translation.lerp(b.translation, f),
+                    linear_velocity: (b.translation - a.translation) / span,
+                    angular_velocity: axis * angle / span,
+                };
+            }
+        }
+        hold(self.keys.last().unwrap())
+    }
+
+    /// The fastest speed of any point within `radius` of the body origin, over all segments:
+    /// |v| + |ω|·radius (plus the translation's own speed).
+    pub fn max_surface_speed(&self, radius: f32) -> f32 {
+        self.keys
+            .windows(2)
+            .map(|w| {
+                let s = self.at(0.5 * (w[0].time + w[1].time));
+                s.linear_velocity.length() + s.angular_velocity.length() * radius
+            })
+            .fold(0.0, f32::max)
+    }
+}

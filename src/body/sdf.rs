@@ -1,0 +1,169 @@
+//! Signed distance fields baked on a dense grid from exact point-to-mesh queries, cached on
+//! disk by mesh hash and resolution.
+
+use super::exact::ExactBody;
+use super::Body;
+use crate::cpu::sdf_sample;
+use glam::{Vec3, Vec4};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Signed distances (negative inside) at the nodes of a regular grid, x fastest.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sdf {
+    /// Position of node (0, 0, 0) in m, body frame.
+    pub origin: Vec3,
+    /// Node spacing in m.
+    pub cell: f32,
+    /// Nodes along x, y, z.
+    pub dims: [u32; 3],
+    /// One value per node, in m.
+    pub values: Vec<f32>,
+}
+
+/// How a bake went.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct BakeReport {
+    /// Seconds spent baking (0 when read from the cache).
+    pub bake_seconds: f64,
+    /// Bytes of the grid.
+    pub bytes: usize,
+    /// Grid nodes along x, y, z.
+    pub dims: [u32; 3],
+    /// Node spacing in m.
+    pub cell_m: f32,
+    /// Whether the grid came from the cache.
+    pub from_cache: bool,
+    /// The cache file, if caching was possible.
+    pub cache_file: Option<String>,
+}
+
+/// The grid a body needs at `cell` spacing with `margin` around its bounding box.
+pub fn grid_for(body: &Body, cell: f32, margin: f32) -> (Vec3, [u32; 3]) {
+    let (lo, hi) = body.mesh.positions.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let origin = lo - Vec3::splat(margin);
+    let size = hi - lo + Vec3::splat(2.0 * margin);
+    let n = (size / cell).ceil().as_uvec3() + 1;
+    (origin, [n.x, n.y, n.z])
+}
+
+/// Bytes of a grid with these dimensions.
+pub fn grid_bytes(dims: [u32; 3]) -> u64 {
+    4 * dims.iter().map(|&d| d as u64).product::<u64>()
+}
+
+impl Sdf {
+    /// Bakes with exact queries on all cores.
+    pub fn bake(body: &Body, cell: f32, margin: f32) -> Result<Sdf, String> {
+        let exact = ExactBody::new(&body.mesh)?;
+        let (origin, dims) = grid_for(body, cell, margin);
+        let [nx, ny, nz] = dims.map(|d| d as usize);
+        let mut values = vec![0.0f32; nx * ny * nz];
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let slab = nx * ny;
+        let per_thread = nz.div_ceil(threads).max(1) * slab;
+        std::thread::scope(|scope| {
+            for (c, chunk) in values.chunks_mut(per_thread).enumerate() {
+                let exact = &exact;
+                scope.spawn(move || {
+                    for (k, v) in chunk.iter_mut().enumerate() {
+                        let idx = c * per_thread + k;
+                        let (i, j, l) = (idx % nx, (idx / nx) % ny, idx / slab);
+                        let p = origin + cell * Vec3::new(i as f32, j as f32, l as f32);
+                        *v = exact.query(p).0;
+                    }
+                });
+            }
+        });
+        Ok(Sdf {
+            origin,
+            cell,
+            dims,
+            values,
+        })
+    }
+
+    /// Bakes, or reads the grid cached under `cache_dir` for the same mesh, cell and margin.
+    pub fn bake_cached(
+        body: &Body,
+        cell: f32,
+        margin: f32,
+        cache_dir: Option<&Path>,
+    ) -> Result<(Sdf, BakeReport), String> {
+        let file: Option<PathBuf> = cache_dir.map(|d| {
+            d.join(format!(
+                "sdf-{:016x}-{:08x}-{:08x}.bin",
+                body.hash(),
+                cell.to_bits(),
+                margin.to_bits()
+            ))
+        });
+        let report = |sdf: &Sdf, seconds: f64, from_cache: bool| BakeReport {
+            bake_seconds: seconds,
+            bytes: 4 * sdf.values.len(),
+            dims: sdf.dims,
+            cell_m: sdf.cell,
+            from_cache,
+            cache_file: file.as_ref().map(|f| f.display().to_string()),
+        };
+        if let Some(sdf) = file.as_deref().and_then(Sdf::read) {
+            let r = report(&sdf, 0.0, true);
+            return Ok((sdf, r));
+        }
+        let start = Instant::now();
+        let sdf = Sdf::bake(body, cell, margin)?;
+        let seconds = start.elapsed().as_secs_f64();
+        if let Some(f) = &file {
+            // A cache that cannot be written only costs a re-bake next time.
+            let _ = std::fs::create_dir_all(f.parent().unwrap_or(Path::new(".")));
+            let _ = crate::output::write_atomic(f, &sdf.to_bytes());
+        }
+        let r = report(&sdf, seconds, false);
+        Ok((sdf, r))
+    }
+
+    const MAGIC: &'static [u8; 8] = b"DKSDF01\0";
+
+    fn to_bytes(&self) -> Vec<u8> {
+        let mut out = Self::MAGIC.to_vec();
+        out.extend_from_slice(bytemuck::cast_slice(&self.dims));
+        out.extend_from_slice(bytemuck::cast_slice(&self.origin.to_array()));
+        out.extend_from_slice(&self.cell.to_le_bytes());
+        out.extend_from_slice(bytemuck::cast_slice(&self.values));
+        out
+    }
+
+    fn read(path: &Path) -> Option<Sdf> {
+        let bytes = std::fs::read(path).ok()?;
+        let header = 8 + 12 + 12 + 4;
+        if bytes.len() < header || &bytes[..8] != Self::MAGIC {
+            return None;
+        }
+        let u = |k: usize| u32::from_le_bytes(bytes[k..k + 4].try_into().unwrap());
+        let f = |k: usize| f32::from_le_bytes(bytes[k..k + 4].try_into().unwrap());
+        let dims = [u(8), u(12), u(16)];
+        let count = dims.iter().map(|&d| d as usize).product::<usize>();
+        if bytes.len() != header + 4 * count {
+            return None;
+        }
+        let values = bytes[header..]
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        Some(Sdf {
+            origin: Vec3::new(f(20), f(24), f(28)),
+            cell: f(32),
+            dims,
+            values,
+        })
+    }
+
+    /// Trilinear φ (w) and its gradient (xyz) at body-frame point `p`; outside the grid φ is
+    /// `crate::cpu::SDF_FAR` and the gradient zero.
+    pub fn sample(&self, p: Vec3) -> Vec4 {
+        sdf_sample(&self.values, self.dims, self.origin, self.cell, p)
+    }
+}

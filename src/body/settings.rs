@@ -1,0 +1,427 @@
+//! The scene's `[body]` table: which body, its SDF, its collision response and its motion.
+
+use super::motion::{Keyframe, Motion};
+use super::sdf::{grid_bytes, grid_for, Sdf};
+use super::{shapes, Body, Collider, Strategy};
+use crate::error::InputError;
+use crate::scene::Checker;
+use glam::{EulerRot, Quat, Vec3};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawBody {
+    path: Option<String>,
+    #[serde(default = "default_units")]
+    units: String,
+    #[serde(default)]
+    offset_m: [f64; 3],
+    shape: Option<String>,
+    #[serde(default)]
+    center_m: [f64; 3],
+    radius_m: Option<f64>,
+    half_extents_m: Option<[f64; 3]>,
+    half_height_m: Option<f64>,
+    #[serde(default = "default_resolution")]
+    sdf_resolution_m: f64,
+    sdf_margin_m: Option<f64>,
+    #[serde(default = "default_max_mb")]
+    sdf_max_mb: f64,
+    #[serde(default = "yes")]
+    sdf_cache: bool,
+    #[serde(default = "default_thickness")]
+    thickness_m: f64,
+    #[serde(default = "default_friction")]
+    friction: f64,
+    #[serde(default)]
+    normal_loss: f64,
+    #[serde(default)]
+    tangential_loss: f64,
+    #[serde(default = "default_strategy")]
+    collision_strategy: String,
+    motion: Option<String>,
+    #[serde(default = "default_turn_angle")]
+    turn_angle_deg: f64,
+    #[serde(default = "default_turn_period")]
+    turn_period_s: f64,
+    #[serde(default)]
+    motion_start_s: f64,
+    #[serde(default)]
+    keyframes: Vec<RawKeyframe>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawKeyframe {
+    time_s: f64,
+    #[serde(default)]
+    translation_m: [f64; 3],
+    #[serde(default)]
+    rotation_deg: [f64; 3],
+}
+
+fn default_units() -> String {
+    "m".into()
+}
+fn default_resolution() -> f64 {
+    0.01
+}
+fn default_max_mb() -> f64 {
+    1024.0
+}
+fn yes() -> bool {
+    true
+}
+fn default_thickness() -> f64 {
+    0.003
+}
+fn default_friction() -> f64 {
+    0.3
+}
+fn default_strategy() -> String {
+    "sdf".into()
+}
+fn default_turn_angle() -> f64 {
+    60.0
+}
+fn default_turn_period() -> f64 {
+    1.0
+}
+
+/// Where the body's triangles come from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum BodySource {
+    /// An OBJ file, scaled to metres and shifted.
+    Mesh {
+        /// Resolved path.
+        path: PathBuf,
+        /// Metres per file unit.
+        scale: f32,
+        /// Translation in m.
+        offset: Vec3,
+    },
+    /// A UV sphere.
+    Sphere {
+        /// Centre in m.
+        center: Vec3,
+        /// Radius in m.
+        radius: f32,
+    },
+    /// An axis-aligned box.
+    Cuboid {
+        /// Centre in m.
+        center: Vec3,
+        /// Half extents in m.
+        half: Vec3,
+    },
+    /// A capsule along y.
+    Capsule {
+        /// Centre in m.
+        center: Vec3,
+        /// Radius in m.
+        radius: f32,
+        /// Half length of the cylinder in m.
+        half_height: f32,
+    },
+}
+
+/// The validated `[body]` table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodySettings {
+    /// The body's triangles.
+    pub source: BodySource,
+    /// SDF node spacing in m.
+    pub sdf_resolution: f32,
+    /// Space around the body's bounding box in m.
+    pub sdf_margin: f32,
+    /// Largest SDF allowed, in bytes.
+    pub sdf_max_bytes: u64,
+    /// Whether to cache baked grids on disk.
+    pub sdf_cache: bool,
+    /// Collision thickness in m.
+    pub thickness: f32,
+    /// Coulomb coefficient.
+    pub friction: f32,
+    /// Fraction of outward normal relative speed lost in contact.
+    pub normal_loss: f32,
+    /// Fraction of tangential relative speed lost in contact.
+    pub tangential_loss: f32,
+    /// CPU contact strategy.
+    pub strategy: Strategy,
+    /// Rigid motion.
+    pub motion: Motion,
+}
+
+/// Sphere/capsule resolution: rings of latitude, fine enough that the facets sit within
+/// 0.5% of the radius (cos(π/48) ≈ 0.9979).
+const SHAPE_RINGS: u32 = 48;
+
+pub(crate) fn parse(c: &Checker, base: &Path, b: &RawBody) -> Result<BodySettings, InputError> {
+    let t = "body";
+    let source = match (&b.path, b.shape.as_deref()) {
+        (Some(p), None) => BodySource::Mesh {
+            path: base.join(p),
+            scale: match b.units.as_str() {
+                "m" => 1.0,
+                "dm" => 0.1,
+                "cm" => 0.01,
+                "mm" => 0.001,
+                other => {
+                    return Err(c.err(
+                        t,
+                        "units",
+                        format!("unknown unit {other:?}"),
+                        "use \"m\", \"dm\", \"cm\" or \"mm\"",
+                    ))
+                }
+            },
+            offset: c.vec3(t, "offset_m", b.offset_m)?,
+        },
+        (None, Some(shape)) => {
+            let center = c.vec3(t, "center_m", b.center_m)?;
+            let need = |key: &str, v: Option<f64>| {
+                v.ok_or_else(|| {
+                    c.err(
+                        t,
+                        key,
+                        format!("a {shape} needs {key}"),
+                        format!("add {key}"),
+                    )
+                })
+            };
+            match shape {
+                "sphere" => BodySource::Sphere {
+                    center,
+                    radius: c.positive(t, "radius_m", need("radius_m", b.radius_m)?, "m")?,
+                },
+                "box" => {
+                    let h = b.half_extents_m.ok_or_else(|| {
+                        c.err(
+                            t,
+                            "half_extents_m",
+                            "a box needs half_extents_m",
+                            "add half_extents_m = [x, y, z]",
+                        )
+                    })?;
+                    BodySource::Cuboid {
+                        center,
+                        half: Vec3::new(
+                            c.positive(t, "half_extents_m", h[0], "m")?,
+                            c.positive(t, "half_extents_m", h[1], "m")?,
+                            c.positive(t, "half_extents_m", h[2], "m")?,
+                        ),
+                    }
+                }
+                "capsule" => BodySource::Capsule {
+                    center,
+                    radius: c.positive(t, "radius_m", need("radius_m", b.radius_m)?, "m")?,
+                    half_height: c.positive(
+                        t,
+                        "half_height_m",
+                        need("half_height_m", b.half_height_m)?,
+                        "m",
+                    )?,
+                },
+                other => {
+                    return Err(c.err(
+                        t,
+                        "shape",
+                        format!("unknown shape {other:?}"),
+                        "use \"sphere\", \"box\" or \"capsule\", or give path = an OBJ body",
+                    ))
+                }
+            }
+        }
+        _ => {
+            return Err(c.err(
+                t,
+                "",
+                "needs exactly one of path (an OBJ body) or shape",
+                "give path = \"...obj\" or shape = \"sphere\"",
+            ))
+        }
+    };
+    let strategy = Strategy::ALL
+        .iter()
+        .find(|(_, name)| *name == b.collision_strategy)
+        .map(|(s, _)| *s)
+        .ok_or_else(|| {
+            let names: Vec<&str> = Strategy::ALL.iter().map(|(_, n)| *n).collect();
+            c.err(
+                t,
+                "collision_strategy",
+                format!("unknown strategy {:?}", b.collision_strategy),
+                format!("use one of {names:?}"),
+            )
+        })?;
+    let fraction = |key: &str, v: f64| -> Result<f32, InputError> {
+        let x = c.non_negative(t, key, v, "fraction")?;
+        if x > 1.0 {
+            return Err(c.err(
+                t,
+                key,
+                format!("{x} is above 1"),
+                "use a fraction between 0 and 1",
+            ));
+        }
+        Ok(x)
+    };
+    let thickness = c.positive(t, "thickness_m", b.thickness_m, "m")?;
+    let resolution = c.positive(t, "sdf_resolution_m", b.sdf_resolution_m, "m")?;
+    let mut keys = Vec::new();
+    for (k, kf) in b.keyframes.iter().enumerate() {
+        let table = format!("body.keyframes[{k}]");
+        let r = c.vec3(&table, "rotation_deg", kf.rotation_deg)?;
+        keys.push(Keyframe {
+            time: c.non_negative(&table, "time_s", kf.time_s, "s")?,
+            translation: c.vec3(&table, "translation_m", kf.translation_m)?,
+            rotation: Quat::from_euler(
+                EulerRot::ZYX,
+                r.z.to_radians(),
+                r.y.to_radians(),
+                r.x.to_radians(),
+            ),
+        });
+        if k > 0 && keys[k].time <= keys[k - 1].time {
+            return Err(c.err(
+                &table,
+                "time_s",
+                "keyframe times must increase",
+                "sort the keyframes by time",
+            ));
+        }
+    }
+    let motion = match (b.motion.as_deref(), keys.is_empty()) {
+        (None, _) => Motion { keys },
+        (Some("turn-right-left"), true) => Motion::turn_right_left(
+            c.finite(t, "turn_angle_deg", b.turn_angle_deg)?,
+            c.positive(t, "turn_period_s", b.turn_period_s, "s")?,
+            c.non_negative(t, "motion_start_s", b.motion_start_s, "s")?,
+        ),
+        (Some("turn-right-left"), false) => {
+            return Err(c.err(
+                t,
+                "motion",
+                "give either motion or keyframes, not both",
+                "remove one",
+            ))
+        }
+        (Some(other), _) => {
+            return Err(c.err(
+                t,
+                "motion",
+                format!("unknown motion {other:?}"),
+                "use \"turn-right-left\" or [[body.keyframes]]",
+            ))
+        }
+    };
+    Ok(BodySettings {
+        source,
+        sdf_resolution: resolution,
+        sdf_margin: match b.sdf_margin_m {
+            Some(m) => c.positive(t, "sdf_margin_m", m, "m")?,
+            // Room for the thickness and the trilinear stencil around the surface.
+            None => (2.0 * thickness).max(3.0 * resolution),
+        },
+        sdf_max_bytes: (c.positive(t, "sdf_max_mb", b.sdf_max_mb, "MiB")? as f64 * 1048576.0)
+            as u64,
+        sdf_cache: b.sdf_cache,
+        thickness,
+        friction: c.non_negative(t, "friction", b.friction, "1")?,
+        normal_loss: fraction("normal_loss", b.normal_loss)?,
+        tangential_loss: fraction("tangential_loss", b.tangential_loss)?,
+        strategy,
+        motion,
+    })
+}
+
+impl BodySettings {
+    /// The body's triangles, checked.
+    pub(crate) fn body(&self, c: &Checker) -> Result<Body, InputError> {
+        let mesh = match &self.source {
+            BodySource::Mesh {
+                path,
+                scale,
+                offset,
+            } => return Body::load(path, *scale, *offset, "body.path"),
+            BodySource::Sphere { center, radius } => shapes::sphere(*center, *radius, SHAPE_RINGS),
+            BodySource::Cuboid { center, half } => shapes::cuboid(*center, *half),
+            BodySource::Capsule {
+                center,
+                radius,
+                half_height,
+            } => shapes::capsule(*center, *radius, *half_height, SHAPE_RINGS),
+        };
+        Body::from_mesh(mesh).map_err(|e| {
+            c.err(
+                "body",
+                "shape",
+                format!("generated an invalid mesh: {e}"),
+                "report this as a bug",
+            )
+        })
+    }
+
+    /// Loads the body, bakes (or reads) its SDF under the memory cap, and builds the collider.
+    pub(crate) fn collider(&self, c: &Checker) -> Result<Collider, InputError> {
+        let body = self.body(c)?;
+        let (_, dims) = grid_for(&body, self.sdf_resolution, self.sdf_margin);
+        let bytes = grid_bytes(dims);
+        if bytes > self.sdf_max_bytes {
+            // Memory falls with the cube of the spacing.
+            let suggested =
+                self.sdf_resolution * (bytes as f32 / self.sdf_max_bytes as f32).cbrt() * 1.05;
+            return Err(c.err(
+                "body",
+                "sdf_resolution_m",
+                format!(
+                    "an SDF at {} m needs {dims:?} nodes = {:.0} MiB, above sdf_max_mb = {:.0}",
+                    self.sdf_resolution,
+                    bytes as f64 / 1048576.0,
+                    self.sdf_max_bytes as f64 / 1048576.0
+                ),
+                format!("use sdf_resolution_m = {suggested:.4} or coarser, or raise sdf_max_mb"),
+            ));
+        }
+        let cache = self.sdf_cache.then(cache_dir).flatten();
+        let (sdf, bake) = Sdf::bake_cached(
+            &body,
+            self.sdf_resolution,
+            self.sdf_margin,
+            cache.as_deref(),
+        )
+        .map_err(|e| {
+            c.err(
+                "body",
+                "",
+                format!("cannot bake the SDF: {e}"),
+                "check the body mesh",
+            )
+        })?;
+        let exact = super::exact::ExactBody::new(&body.mesh).map_err(|e| {
+            c.err(
+                "body",
+                "",
+                format!("cannot build the BVH: {e}"),
+                "check the body mesh",
+            )
+        })?;
+        Ok(Collider {
+            body,
+            sdf,
+            exact,
+            motion: self.motion.clone(),
+            strategy: self.strategy,
+            bake,
+        })
+    }
+}
+
+/// `$XDG_CACHE_HOME/drapekit`, else `$HOME/.cache/drapekit`.
+fn cache_dir() -> Option<PathBuf> {
+    let base = std::env::var_os("XDG_CACHE_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))?;
+    Some(base.join("drapekit"))
+}

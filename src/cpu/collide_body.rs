@@ -1,0 +1,122 @@
+//! CPU twin of `kernels/collide_body.wgsl`, plus the same response driven by other contact
+//! queries (the CPU collision strategies).
+
+use crate::gpu::layout::{SimParams, SubstepParams};
+use glam::{Vec3, Vec4};
+
+/// φ outside the grid: no contact.
+pub const SDF_FAR: f32 = 1e30;
+
+/// Trilinear φ (w) and its gradient (xyz) at body-frame point `p` of a grid with `dims` nodes
+/// from `origin` at `cell` spacing (x fastest).
+pub fn sdf_sample(values: &[f32], dims: [u32; 3], origin: Vec3, cell: f32, p: Vec3) -> Vec4 {
+    let g = (p - origin) / cell;
+    let last = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) - Vec3::ONE;
+    if g.cmplt(Vec3::ZERO).any() || g.cmpge(last).any() {
+        return Vec4::new(0.0, 0.0, 0.0, SDF_FAR);
+    }
+    let c = g.floor().as_uvec3();
+    let f = g - g.floor();
+    let node = |i: u32, j: u32, k: u32| values[(i + dims[0] * (j + dims[1] * k)) as usize];
+    let c000 = node(c.x, c.y, c.z);
+    let c100 = node(c.x + 1, c.y, c.z);
+    let c010 = node(c.x, c.y + 1, c.z);
+    let c110 = node(c.x + 1, c.y + 1, c.z);
+    let c001 = node(c.x, c.y, c.z + 1);
+    let c101 = node(c.x + 1, c.y, c.z + 1);
+    let c011 = node(c.x, c.y + 1, c.z + 1);
+    let c111 = node(c.x + 1, c.y + 1, c.z + 1);
+    let x00 = c000 + f.x * (c100 - c000);
+    let x10 = c010 + f.x * (c110 - c010);
+    let x01 = c001 + f.x * (c101 - c001);
+    let x11 = c011 + f.x * (c111 - c011);
+    let y0 = x00 + f.y * (x10 - x00);
+    let y1 = x01 + f.y * (x11 - x01);
+    let phi = y0 + f.z * (y1 - y0);
+    let d00 = c100 - c000;
+    let d10 = c110 - c010;
+    let d01 = c101 - c001;
+    let d11 = c111 - c011;
+    let dy0 = d00 + f.y * (d10 - d00);
+    let dy1 = d01 + f.y * (d11 - d01);
+    let gx = dy0 + f.z * (dy1 - dy0);
+    let gy = (x10 - x00) + f.z * ((x11 - x01) - (x10 - x00));
+    let gz = y1 - y0;
+    (Vec3::new(gx, gy, gz) / cell).extend(phi)
+}
+
+fn v3(a: [f32; 4]) -> Vec3 {
+    Vec3::new(a[0], a[1], a[2])
+}
+
+/// One particle's collision response. `query` gives φ (w) and ∇φ (xyz) at a body-frame point.
+pub fn collide_particle(
+    params: &SimParams,
+    step: &SubstepParams,
+    p: Vec4,
+    v: Vec3,
+    query: impl Fn(Vec3) -> Vec4,
+) -> (Vec4, Vec3) {
+    let mut x = p.truncate();
+    let mut v_new = v;
+    if p.w != 0.0 {
+        let (bx, by, bz) = (v3(step.body_x), v3(step.body_y), v3(step.body_z));
+        let t = v3(step.body_translation);
+        let d = x - t;
+        let xb = Vec3::new(bx.dot(d), by.dot(d), bz.dot(d));
+        let s = query(xb);
+        if s.w < params.thickness {
+            let n = safe_normalize(bx * s.x + by * s.y + bz * s.z);
+            if n.dot(n) > 0.0 {
+                x += (params.thickness - s.w) * n;
+                let v_body = v3(step.body_velocity) + v3(step.body_angular_velocity).cross(x - t);
+                let v_rel = v - v_body;
+                let mut vn = v_rel.dot(n);
+                let mut vt = v_rel - vn * n;
+                if vn < 0.0 {
+                    // Coulomb: tangential speed drops by μ times the normal speed taken away.
+                    let vt_len = vt.length();
+                    if vt_len > 0.0 {
+                        vt *= (1.0 - params.friction * (-vn) / vt_len).max(0.0);
+                    }
+                    vn = 0.0;
+                } else {
+                    vn *= 1.0 - params.normal_loss;
+                }
+                vt *= 1.0 - params.tangential_loss;
+                v_new = v_body + vt + vn * n;
+            }
+        }
+    }
+    (x.extend(p.w), v_new)
+}
+
+fn safe_normalize(v: Vec3) -> Vec3 {
+    let len = v.length();
+    if len > 1e-12 {
+        v / len
+    } else {
+        Vec3::ZERO
+    }
+}
+
+/// Collides every particle with the body through the SDF (in place: each particle reads and
+/// writes only its own state).
+pub fn collide_body(
+    params: &SimParams,
+    step: &SubstepParams,
+    pos: &mut [Vec4],
+    vel: &mut [Vec4],
+    sdf: &[f32],
+) {
+    let dims = [params.sdf_dims[0], params.sdf_dims[1], params.sdf_dims[2]];
+    let origin = v3(params.sdf_origin);
+    let cell = params.sdf_origin[3];
+    for i in 0..params.num_particles as usize {
+        let (x, v) = collide_particle(params, step, pos[i], vel[i].truncate(), |p| {
+            sdf_sample(sdf, dims, origin, cell, p)
+        });
+        pos[i] = x;
+        vel[i] = v.extend(0.0);
+    }
+}
