@@ -9,7 +9,7 @@ pub mod shapes;
 
 use crate::error::InputError;
 use crate::mesh::TriMesh;
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -223,7 +223,7 @@ impl Body {
 }
 
 /// The closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection 5.1.5).
-pub fn closest_point_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
     if d1 <= 0.0 && d2 <= 0.0 {
@@ -272,15 +272,18 @@ pub fn winding_number(mesh: &TriMesh, p: Vec3) -> f64 {
 /// Every triangle tested: signed distance (negative inside, by winding number) and the nearest
 /// surface point. O(triangles) per query; for small tests and as a reference.
 pub fn brute_query(mesh: &TriMesh, p: Vec3) -> (f32, Vec3) {
-    let mut best = (f32::INFINITY, p);
+    // In f64: the reference must not add its own rounding to the comparison.
+    let pd = p.as_dvec3();
+    let mut best = (f64::INFINITY, pd);
     for t in &mesh.triangles {
-        let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-        let q = closest_point_on_triangle(p, a, b, c);
-        let d = p.distance(q);
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3());
+        let q = closest_point_on_triangle(pd, a, b, c);
+        let d = pd.distance(q);
         if d < best.0 {
             best = (d, q);
         }
     }
     let inside = winding_number(mesh, p) > 0.5;
-    (if inside { -best.0 } else { best.0 }, best.1)
+    let d = best.0 as f32;
+    (if inside { -d } else { d }, best.1.as_vec3())
 }

@@ -49,6 +49,10 @@ impl Rng {
         self.0 ^= self.0 << 17;
         (self.0 >> 40) as f32 / (1u64 << 23) as f32 - 1.0
     }
+    /// Uniform in [0, 1).
+    pub fn unit(&mut self) -> f32 {
+        0.5 * (self.signed() + 1.0)
+    }
     pub fn vec3(&mut self, scale: f32) -> glam::Vec3 {
         glam::Vec3::new(self.signed(), self.signed(), self.signed()) * scale
     }

@@ -1,0 +1,328 @@
+//! Bodies and collision: mesh checks, the SDF against exact queries, motion, contact
+//! strategies, GPU/CPU parity of collide_body, and penetration on drape_sphere.
+
+mod common;
+
+use common::{fixture, gpu, max_abs_diff, Rng};
+use drapekit::body::exact::ExactBody;
+use drapekit::body::motion::Motion;
+use drapekit::body::sdf::Sdf;
+use drapekit::body::{brute_query, close_and_orient, shapes, signed_volume, Body};
+use drapekit::cpu::CpuSolver;
+use drapekit::gpu::GpuSolver;
+use drapekit::mesh::TriMesh;
+use drapekit::plan::Pass;
+use drapekit::scene::Scene;
+use drapekit::sim::{prepare, substep_params};
+use drapekit::solver::Solver;
+use glam::Vec3;
+
+fn random_point(rng: &mut Rng, lo: Vec3, hi: Vec3) -> Vec3 {
+    Vec3::new(
+        lo.x + (hi.x - lo.x) * rng.unit(),
+        lo.y + (hi.y - lo.y) * rng.unit(),
+        lo.z + (hi.z - lo.z) * rng.unit(),
+    )
+}
+
+fn test_bodies() -> Vec<(&'static str, Body)> {
+    vec![
+        (
+            "sphere",
+            Body::from_mesh(shapes::sphere(Vec3::new(0.1, 0.2, 0.0), 0.3, 24)).unwrap(),
+        ),
+        (
+            "box",
+            Body::from_mesh(shapes::cuboid(Vec3::ZERO, Vec3::new(0.2, 0.1, 0.15))).unwrap(),
+        ),
+        (
+            "capsule",
+            Body::from_mesh(shapes::capsule(Vec3::ZERO, 0.1, 0.2, 24)).unwrap(),
+        ),
+    ]
+}
+
+#[test]
+fn generated_shapes_are_closed_and_outward() {
+    for (name, body) in test_bodies() {
+        assert_eq!(body.repairs, Default::default(), "{name} needed repairs");
+        assert!(signed_volume(&body.mesh) > 0.0, "{name} is inside out");
+    }
+}
+
+#[test]
+fn open_and_non_manifold_meshes_are_refused_and_flips_repaired() {
+    let closed = shapes::cuboid(Vec3::ZERO, Vec3::ONE);
+    let mut open = closed.clone();
+    open.triangles.pop();
+    assert!(close_and_orient(&mut open).unwrap_err().contains("open"));
+    let mut fin = closed.clone();
+    fin.positions.push(Vec3::new(5.0, 5.0, 5.0));
+    fin.triangles.push([0, 2, 8]); // a third face on edge 0–2
+    assert!(close_and_orient(&mut fin)
+        .unwrap_err()
+        .contains("non-manifold"));
+    let mut flipped = closed.clone();
+    flipped.triangles[3].swap(1, 2);
+    flipped.triangles[7].swap(1, 2);
+    let r = close_and_orient(&mut flipped).unwrap();
+    assert_eq!(r.flipped_faces, 2);
+    assert_eq!(flipped.triangles, closed.triangles);
+    let mut inside_out: TriMesh = closed.clone();
+    for t in &mut inside_out.triangles {
+        t.swap(1, 2);
+    }
+    assert!(
+        close_and_orient(&mut inside_out)
+            .unwrap()
+            .turned_outside_out
+    );
+    assert!(signed_volume(&inside_out) > 0.0);
+}
+
+#[test]
+fn sign_is_right_on_points_known_inside_and_outside() {
+    for (name, body) in test_bodies() {
+        let exact = ExactBody::new(&body.mesh).unwrap();
+        let (lo, hi) = bounds(&body.mesh);
+        let centre = 0.5 * (lo + hi);
+        assert!(exact.query(centre).0 < 0.0, "{name}: centre not inside");
+        for dir in [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z] {
+            let far = centre + dir * 2.0 * (hi - lo).length();
+            assert!(
+                exact.query(far).0 > 0.0,
+                "{name}: {dir} far point not outside"
+            );
+        }
+        // Exact and brute force (winding number) agree on sign and distance everywhere.
+        let mut rng = Rng::new(11);
+        for _ in 0..300 {
+            let p = random_point(&mut rng, lo - Vec3::splat(0.05), hi + Vec3::splat(0.05));
+            let (a, qa) = exact.query(p);
+            let (b, qb) = brute_query(&body.mesh, p);
+            assert_eq!(a < 0.0, b < 0.0, "{name}: sign at {p}");
+            assert!((a - b).abs() < 1e-6, "{name}: {a} vs {b} at {p}");
+            assert!(
+                qa.distance(qb) < 1e-5,
+                "{name}: nearest {qa} vs {qb} at {p} (d {a})"
+            );
+        }
+    }
+}
+
+fn bounds(mesh: &TriMesh) -> (Vec3, Vec3) {
+    mesh.positions
+        .iter()
+        .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        })
+}
+
+#[test]
+fn sdf_matches_exact_queries_within_half_a_cell() {
+    for (name, body) in test_bodies() {
+        let cell = 0.01;
+        let sdf = Sdf::bake(&body, cell, 0.03).unwrap();
+        let exact = ExactBody::new(&body.mesh).unwrap();
+        let (lo, hi) = bounds(&body.mesh);
+        let mut rng = Rng::new(5);
+        for _ in 0..2000 {
+            let p = random_point(&mut rng, lo - Vec3::splat(0.02), hi + Vec3::splat(0.02));
+            let phi = sdf.sample(p).w;
+            let (d, _) = exact.query(p);
+            // Trilinear interpolation of a 1-Lipschitz function on nodes `cell` apart is off by
+            // at most half the cell diagonal's worth in the worst corner; the issue asks for
+            // half a cell, which holds away from sharp edges and is what we test.
+            assert!(
+                (phi - d).abs() <= 0.5 * cell,
+                "{name}: φ {phi} vs {d} at {p}"
+            );
+            if d.abs() > 0.5 * cell {
+                assert_eq!(phi < 0.0, d < 0.0, "{name}: sign at {p}");
+            }
+        }
+    }
+}
+
+#[test]
+fn baked_grids_are_cached_by_mesh_and_resolution() {
+    let dir = std::env::temp_dir().join(format!("drapekit-sdf-cache-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let body = &test_bodies()[0].1;
+    let (a, ra) = Sdf::bake_cached(body, 0.02, 0.04, Some(&dir)).unwrap();
+    let (b, rb) = Sdf::bake_cached(body, 0.02, 0.04, Some(&dir)).unwrap();
+    assert!(!ra.from_cache && rb.from_cache);
+    assert_eq!(a, b);
+    let (_, rc) = Sdf::bake_cached(body, 0.025, 0.04, Some(&dir)).unwrap();
+    assert!(!rc.from_cache, "a new resolution is a new bake");
+    assert_eq!(ra.bytes, 4 * a.values.len());
+}
+
+#[test]
+fn turn_right_left_motion() {
+    let m = Motion::turn_right_left(60.0, 1.0, 0.5);
+    let yaw = |t: f32| {
+        let (axis, angle) = m.at(t).rotation.to_axis_angle();
+        (axis.y.signum() * angle).to_degrees()
+    };
+    assert!(yaw(0.25).abs() < 1e-4, "still before the start");
+    assert!(
+        (yaw(1.5) + 60.0).abs() < 1e-3,
+        "turned right (negative yaw) at 1.5 s: {}",
+        yaw(1.5)
+    );
+    assert!(
+        (yaw(3.5) - 60.0).abs() < 1e-3,
+        "turned left at 3.5 s: {}",
+        yaw(3.5)
+    );
+    assert!(yaw(5.0).abs() < 1e-3, "back at 4.5 s");
+    // Constant angular speed within a segment: 60° per second about y.
+    let w = m.at(1.0).angular_velocity;
+    assert!(
+        (w - Vec3::new(0.0, -60f32.to_radians(), 0.0)).length() < 1e-4,
+        "{w}"
+    );
+    // A point 1 m from the axis moves at most 60°/s · 1 m.
+    assert!((m.max_surface_speed(1.0) - 60f32.to_radians()).abs() < 1e-4);
+}
+
+/// The drape_sphere scene, with its cloth lowered 5 cm into the sphere's cap, so that ~150
+/// particles start inside or within the thickness.
+fn touching_sphere() -> drapekit::sim::Prepared {
+    let mut scene = Scene::load(&fixture("scenes/drape_sphere.toml")).unwrap();
+    if let drapekit::scene::ClothSource::Grid { center, .. } = &mut scene.cloth {
+        center.y = 0.25;
+    }
+    prepare(&scene).unwrap()
+}
+
+#[test]
+fn parity_collide_body() {
+    let Some(ctx) = gpu() else { return };
+    let prep = touching_sphere();
+    assert!(prep.plan.contains(Pass::CollideBody));
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
+    // 5 mm and 0.5 m/s perturbations put particles on both sides of the thickness.
+    let state = common::perturbed(&cpu.state().unwrap(), 3, 5e-3, 0.5);
+    cpu.set_state(&state);
+    gpu.set_state(&state);
+    let step = substep_params(&prep, 1)[0];
+    cpu.run_pass(Pass::CollideBody, &step);
+    gpu.run_passes(&[Pass::CollideBody], &[step]).unwrap();
+    let g = gpu.state().unwrap();
+    let moved = (0..state.positions.len())
+        .filter(|&i| cpu.pos[i] != state.positions[i])
+        .count();
+    assert!(moved > 100, "only {moved} particles collided");
+    // Positions are O(0.5 m): one f32 rounding is 3e-8 m; the projection adds a handful of
+    // roundings (trilinear φ, normalisation), so 1e-6 m is ample and still far below the
+    // millimetre corrections being compared. Velocities are O(1 m/s): the same reasoning.
+    let dx = max_abs_diff(&g.positions, &cpu.pos);
+    let dv = max_abs_diff(&g.velocities, &cpu.vel);
+    assert!(dx <= 1e-6, "positions differ by {dx} m");
+    assert!(dv <= 1e-5, "velocities differ by {dv} m/s");
+}
+
+#[test]
+fn strategies_find_the_same_contacts() {
+    let prep = touching_sphere();
+    let c = prep.model.collider.as_ref().unwrap();
+    let state = common::perturbed(
+        &CpuSolver::new(&prep.model, prep.params, &prep.plan)
+            .state()
+            .unwrap(),
+        9,
+        5e-3,
+        0.0,
+    );
+    let thickness = prep.params.thickness;
+    let mut contacts = [Vec::new(), Vec::new(), Vec::new()];
+    for (i, p) in state.positions.iter().enumerate() {
+        let p = p.truncate();
+        let (de, qe) = c.exact.query(p);
+        let (db, qb) = brute_query(&c.body.mesh, p);
+        let ds = c.sdf.sample(p).w;
+        if de < thickness {
+            contacts[0].push(i);
+            assert!(
+                qe.distance(qb) <= 1e-6,
+                "particle {i}: nearest points {qe} vs {qb}"
+            );
+        }
+        if db < thickness {
+            contacts[1].push(i);
+        }
+        if ds < thickness {
+            contacts[2].push(i);
+        }
+        // The SDF is within half a cell of the exact distance inside its grid; outside it
+        // (the grid spans the body plus a margin above the thickness) it reports no contact.
+        if ds == drapekit::cpu::SDF_FAR {
+            assert!(de > thickness, "particle {i} at {de} m is off the grid");
+        } else {
+            assert!(
+                (ds - de).abs() <= 0.5 * c.sdf.cell,
+                "particle {i}: {ds} vs {de}"
+            );
+        }
+    }
+    assert!(contacts[0].len() > 100);
+    assert_eq!(contacts[0], contacts[1], "exact and brute");
+    // The SDF strategy may differ only for particles within half a cell of the threshold.
+    for i in contacts[0].iter().filter(|i| !contacts[2].contains(i)) {
+        let d = c.exact.query(state.positions[*i].truncate()).0;
+        assert!(
+            (d - thickness).abs() <= 0.5 * c.sdf.cell,
+            "particle {i} at {d}"
+        );
+    }
+}
+
+/// Runs drape_sphere substep by substep and returns the deepest any particle ever got inside
+/// the true sphere (the mesh's facets lie inside it, so this bounds the mesh penetration).
+fn deepest_inside_sphere(
+    solver: &mut dyn Solver,
+    prep: &drapekit::sim::Prepared,
+    frames: u32,
+) -> f32 {
+    let mut deepest = 0.0f32;
+    for frame in 1..=frames {
+        for step in substep_params(prep, frame) {
+            solver.advance(&[step]).unwrap();
+            let s = solver.state().unwrap();
+            for p in &s.positions {
+                deepest = deepest.max(0.3 - p.truncate().length());
+            }
+        }
+    }
+    deepest
+}
+
+#[test]
+fn drape_sphere_never_penetrates_more_than_a_millimetre() {
+    let mut scene = Scene::load(&fixture("scenes/drape_sphere.toml")).unwrap();
+    // 24 frames (1 s): the cloth lands at ~0.26 s and has settled onto the sphere by 1 s.
+    scene.solver.frames = 24;
+    let prep = prepare(&scene).unwrap();
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let deepest = deepest_inside_sphere(&mut cpu, &prep, 24);
+    assert!(deepest <= 1e-3, "cpu: {deepest} m inside");
+    if let Some(ctx) = gpu() {
+        let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
+        let deepest = deepest_inside_sphere(&mut gpu, &prep, 24);
+        assert!(deepest <= 1e-3, "gpu: {deepest} m inside");
+    }
+    // The cloth did reach the sphere: this is not a test of a cloth that never fell.
+    let s = cpu.state().unwrap();
+    let closest = s
+        .positions
+        .iter()
+        .map(|p| p.truncate().length() - 0.3)
+        .fold(f32::MAX, f32::min);
+    assert!(
+        closest < 0.005,
+        "closest particle {closest} m from the sphere"
+    );
+}
