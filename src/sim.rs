@@ -146,6 +146,19 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
             (n as u32, true)
         }
     };
+    if let Some(r) = model.collider.as_ref().map(|c| &c.body.repairs) {
+        if r.flipped_faces > 0 || r.turned_outside_out {
+            warnings.push(format!(
+                "body: repaired orientation ({} faces flipped to match their neighbours{})",
+                r.flipped_faces,
+                if r.turned_outside_out {
+                    "; the mesh was inside out and was turned"
+                } else {
+                    ""
+                }
+            ));
+        }
+    }
     // Tunnelling: no body surface point may move more than the thickness in one substep.
     let mut substeps = substeps;
     let mut body_surface_speed = 0.0f32;

@@ -326,3 +326,42 @@ fn drape_sphere_never_penetrates_more_than_a_millimetre() {
         "closest particle {closest} m from the sphere"
     );
 }
+
+#[test]
+fn shipped_mannequins_are_closed_and_their_sign_agrees_with_the_winding_number() {
+    for (file, expected_vertices) in [("mannequin.obj", 13380), ("mannequin_lowpoly.obj", 615)] {
+        let path = fixture(&format!("bodies/{file}"));
+        let body = Body::load(&path, 1.0, Vec3::ZERO, "body.path").unwrap();
+        assert_eq!(body.mesh.positions.len(), expected_vertices, "{file}");
+        assert!(signed_volume(&body.mesh) > 0.0, "{file}");
+        let (lo, hi) = bounds(&body.mesh);
+        // A standing adult: 1.6 to 1.8 m tall, in metres.
+        assert!(
+            (1.6..1.8).contains(&(hi.y - lo.y)),
+            "{file}: height {}",
+            hi.y - lo.y
+        );
+        let exact = ExactBody::new(&body.mesh).unwrap();
+        let mut rng = Rng::new(17);
+        let mut inside = 0;
+        for _ in 0..200 {
+            let p = random_point(&mut rng, lo, hi);
+            // The winding number is 1 inside and 0 outside for a closed mesh; away from the
+            // surface it is within 1e-3 of an integer, so 0.5 is an unambiguous threshold.
+            let w = drapekit::body::winding_number(&body.mesh, p);
+            let (d, _) = exact.query(p);
+            if d.abs() > 1e-4 {
+                assert_eq!(
+                    d < 0.0,
+                    w > 0.5,
+                    "{file}: at {p}, distance {d}, winding {w}"
+                );
+            }
+            inside += (w > 0.5) as u32;
+        }
+        assert!(
+            inside > 10,
+            "{file}: only {inside} of 200 points inside: the test must see both"
+        );
+    }
+}
