@@ -365,3 +365,66 @@ fn shipped_mannequins_are_closed_and_their_sign_agrees_with_the_winding_number()
         );
     }
 }
+
+#[test]
+fn bvh_strategies_agree_with_exact_on_a_recorded_state() {
+    use drapekit::body::bvh::{BodyBvh, VolumeKind};
+    let prep = touching_sphere();
+    let c = prep.model.collider.as_ref().unwrap();
+    let state = common::perturbed(
+        &CpuSolver::new(&prep.model, prep.params, &prep.plan)
+            .state()
+            .unwrap(),
+        9,
+        5e-3,
+        0.0,
+    );
+    let thickness = prep.params.thickness;
+    // The mannequin too: a real, non-convex body with thin parts.
+    let mannequin = Body::load(
+        &fixture("bodies/mannequin_lowpoly.obj"),
+        1.0,
+        Vec3::ZERO,
+        "b",
+    )
+    .unwrap();
+    let m_exact = ExactBody::new(&mannequin.mesh).unwrap();
+    let mut rng = Rng::new(23);
+    let (lo, hi) = bounds(&mannequin.mesh);
+    let m_points: Vec<Vec3> = (0..400).map(|_| random_point(&mut rng, lo, hi)).collect();
+    for kind in [VolumeKind::Aabb, VolumeKind::Obb, VolumeKind::Sphere] {
+        let bvh = BodyBvh::new(&c.body.mesh, kind);
+        let mut same = 0;
+        for (i, p) in state.positions.iter().enumerate() {
+            let p = p.truncate();
+            let (de, qe) = c.exact.query(p);
+            let (db, qb) = bvh.query(p);
+            assert_eq!(
+                de < thickness,
+                db < thickness,
+                "{kind:?}: contact of particle {i}"
+            );
+            if de < thickness {
+                same += 1;
+                // f32 parry vs f64 reference: both round the nearest point once at ~0.3 m.
+                assert!(
+                    qe.distance(qb) <= 1e-6,
+                    "{kind:?}: particle {i}: {qe} vs {qb}"
+                );
+            }
+        }
+        assert!(same > 100, "{kind:?}: only {same} contacts");
+        let bvh = BodyBvh::new(&mannequin.mesh, kind);
+        for p in &m_points {
+            let (de, _) = m_exact.query(*p);
+            let (db, _) = bvh.query(*p);
+            assert!(
+                (de - db).abs() <= 1e-6,
+                "{kind:?}: mannequin at {p}: {de} vs {db}"
+            );
+            if de.abs() > 1e-4 {
+                assert_eq!(de < 0.0, db < 0.0, "{kind:?}: mannequin sign at {p}");
+            }
+        }
+    }
+}

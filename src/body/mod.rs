@@ -1,6 +1,7 @@
 //! Collision bodies: closed triangle meshes in their own frame (metres), loaded from OBJ or
 //! generated (sphere, box, capsule), with a baked signed distance field and rigid motion.
 
+pub mod bvh;
 pub mod exact;
 pub mod motion;
 pub mod sdf;
@@ -23,15 +24,34 @@ pub enum Strategy {
     Exact,
     /// Every particle against every triangle (small tests only).
     Brute,
+    /// Our BVH with axis-aligned boxes.
+    BvhAabb,
+    /// Our BVH with oriented boxes (separating-axis distance bounds).
+    BvhObb,
+    /// Our BVH with bounding spheres.
+    BvhSphere,
 }
 
 impl Strategy {
     /// Every strategy with its scene name.
-    pub const ALL: [(Strategy, &'static str); 3] = [
+    pub const ALL: [(Strategy, &'static str); 6] = [
         (Strategy::Sdf, "sdf"),
         (Strategy::Exact, "exact"),
         (Strategy::Brute, "brute"),
+        (Strategy::BvhAabb, "bvh-aabb"),
+        (Strategy::BvhObb, "bvh-obb"),
+        (Strategy::BvhSphere, "bvh-sphere"),
     ];
+
+    /// The bounding volume of a BVH strategy.
+    pub fn volume(self) -> Option<bvh::VolumeKind> {
+        match self {
+            Strategy::BvhAabb => Some(bvh::VolumeKind::Aabb),
+            Strategy::BvhObb => Some(bvh::VolumeKind::Obb),
+            Strategy::BvhSphere => Some(bvh::VolumeKind::Sphere),
+            _ => None,
+        }
+    }
 
     /// The scene name.
     pub fn name(self) -> &'static str {
@@ -55,8 +75,22 @@ pub struct Collider {
     pub motion: motion::Motion,
     /// How the CPU path finds contacts.
     pub strategy: Strategy,
+    /// The hierarchy of a BVH strategy.
+    pub bvh: Option<bvh::BodyBvh>,
     /// How the SDF was obtained.
     pub bake: sdf::BakeReport,
+}
+
+impl Collider {
+    /// Signed distance (negative inside) and nearest surface point by the CPU strategy (the SDF
+    /// strategy has no nearest point; use `sdf.sample`).
+    pub fn query(&self, p: Vec3) -> (f32, Vec3) {
+        match (self.strategy, &self.bvh) {
+            (_, Some(bvh)) => bvh.query(p),
+            (Strategy::Brute, _) => brute_query(&self.body.mesh, p),
+            _ => self.exact.query(p),
+        }
+    }
 }
 
 /// Colliders compare by identity: two models share a body only if they share the `Arc`.

@@ -407,7 +407,12 @@ impl BodySettings {
                 "check the body mesh",
             )
         })?;
+        let bvh = self
+            .strategy
+            .volume()
+            .map(|kind| super::bvh::BodyBvh::new(&body.mesh, kind));
         Ok(Collider {
+            bvh,
             body,
             sdf,
             exact,

@@ -154,12 +154,9 @@ impl CpuSolver {
         let p = &self.params;
         match c.strategy {
             Strategy::Sdf => collide_body(p, step, &mut self.pos, &mut self.vel, &c.sdf.values),
-            Strategy::Exact | Strategy::Brute => {
+            _ => {
                 let query = |x: glam::Vec3| {
-                    let (phi, nearest) = match c.strategy {
-                        Strategy::Exact => c.exact.query(x),
-                        _ => crate::body::brute_query(&c.body.mesh, x),
-                    };
+                    let (phi, nearest) = c.query(x);
                     // ∇φ points away from the surface outside and towards it inside.
                     let d = x - nearest;
                     let len = d.length();
