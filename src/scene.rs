@@ -142,6 +142,8 @@ struct RawWorld {
     gravity_m_s2: [f64; 3],
     #[serde(default)]
     air_damping_per_s: f64,
+    #[serde(default)]
+    gravity_start_s: f64,
 }
 
 impl Default for RawWorld {
@@ -149,6 +151,7 @@ impl Default for RawWorld {
         RawWorld {
             gravity_m_s2: default_gravity(),
             air_damping_per_s: 0.0,
+            gravity_start_s: 0.0,
         }
     }
 }
@@ -392,6 +395,8 @@ pub struct Scene {
     pub pins: Vec<PinSelection>,
     /// Gravity in m/s².
     pub gravity: Vec3,
+    /// Gravity is off before this time (a zero-gravity sewing phase), in s.
+    pub gravity_start: f32,
     /// Air damping in 1/s.
     pub air_damping: f32,
     /// Wind, if any.
@@ -807,6 +812,8 @@ impl Scene {
         }
 
         let gravity = c.vec3("world", "gravity_m_s2", raw.world.gravity_m_s2)?;
+        let gravity_start =
+            c.non_negative("world", "gravity_start_s", raw.world.gravity_start_s, "s")?;
         let air_damping = c.non_negative(
             "world",
             "air_damping_per_s",
@@ -907,6 +914,7 @@ impl Scene {
             fabric,
             pins,
             gravity,
+            gravity_start,
             air_damping,
             wind,
             body: match &raw.body {

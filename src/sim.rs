@@ -53,6 +53,8 @@ pub struct Prepared {
     pub scene_pins: Vec<u32>,
     /// Fastest speed of any body surface point, in m/s (0 without a moving body).
     pub body_surface_speed: f32,
+    /// Gravity, and the output frame after which it is switched on (0: from the start).
+    pub gravity: (glam::Vec3, u32),
 }
 
 impl Prepared {
@@ -189,7 +191,11 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     let body = scene.body.as_ref();
     let sdf = model.collider.as_ref().map(|c| &c.sdf);
     let params = SimParams {
-        gravity: scene.gravity.extend(0.0).to_array(),
+        gravity: if scene.gravity_start > 0.0 {
+            [0.0; 4]
+        } else {
+            scene.gravity.extend(0.0).to_array()
+        },
         num_particles: model.len() as u32,
         integrator: s.integrator,
         dt,
@@ -223,6 +229,10 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         attached,
         attach_frames,
         body_surface_speed,
+        gravity: (
+            scene.gravity,
+            (scene.gravity_start / frame_dt).ceil() as u32,
+        ),
     })
 }
 
@@ -355,6 +365,11 @@ pub fn simulate(
             stats.seams_closed_frame = Some(frame);
         }
         on_frame(frame, &state)?;
+        if frame == prep.gravity.1 && frame > 0 {
+            let mut params = prep.params;
+            params.gravity = prep.gravity.0.extend(0.0).to_array();
+            solver.set_params(&params);
+        }
         if frame == prep.attach_frames && !prep.attached.is_empty() {
             release(prep, solver, state)?;
             stats.released_after_frame = Some(frame);

@@ -39,6 +39,8 @@ pub trait Solver {
     fn state(&mut self) -> Result<ParticleState, Error>;
     /// Replaces positions (w = inverse mass) and velocities, e.g. to release attachments.
     fn set_state(&mut self, state: &ParticleState);
+    /// Replaces the run-constant parameters between frames (e.g. to switch gravity on).
+    fn set_params(&mut self, params: &crate::gpu::layout::SimParams);
     /// Waits until submitted work has finished, without reading anything back (for timing).
     fn finish(&mut self) -> Result<(), Error> {
         Ok(())

@@ -196,6 +196,10 @@ impl Solver for CpuSolver {
         Ok(())
     }
 
+    fn set_params(&mut self, params: &SimParams) {
+        self.params = *params;
+    }
+
     /// Replaces positions and velocities and clears forces.
     fn set_state(&mut self, state: &ParticleState) {
         self.pos.clone_from(&state.positions);

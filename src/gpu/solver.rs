@@ -53,6 +53,7 @@ struct SubstepBuffer {
 /// The wgpu backend. Creates textures, buffers and pipelines only for the stages in its plan.
 pub struct GpuSolver {
     ctx: GpuContext,
+    params: wgpu::Buffer,
     pos: [TexelArray; 2],
     vel: [TexelArray; 2],
     forces: Vec<TexelArray>,
@@ -86,7 +87,7 @@ impl GpuSolver {
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("params"),
                 contents: bytemuck::bytes_of(&params),
-                usage: wgpu::BufferUsages::UNIFORM,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             });
         let state = |label: &str, data: &[Vec4]| -> Result<[TexelArray; 2], Error> {
             let bytes = bytemuck::cast_slice(data);
@@ -271,6 +272,7 @@ impl GpuSolver {
         };
         Ok(GpuSolver {
             ctx: ctx.clone(),
+            params: params_buf,
             pos,
             vel,
             forces,
@@ -525,6 +527,12 @@ impl Solver for GpuSolver {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| Error::Gpu(format!("waiting for the GPU failed: {e}")))?;
         Ok(())
+    }
+
+    fn set_params(&mut self, params: &SimParams) {
+        self.ctx
+            .queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(params));
     }
 
     /// Replaces positions and velocities and clears forces.
