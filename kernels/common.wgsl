@@ -30,6 +30,10 @@ struct SimParams {
     friction: f32,               // 1, Coulomb coefficient against the body
     normal_loss: f32,            // 1, fraction of outward normal relative speed lost in contact
     tangential_loss: f32,        // 1, fraction of tangential relative speed lost in contact
+    self_thickness: f32,         // m, particles of the cloth keep this far apart (self-collision)
+    hash_cell: f32,              // m, spatial hash cell size (at least self_thickness)
+    hash_buckets: u32,           // spatial hash table size
+    _pad2: u32,
 }
 
 // Values that change per substep. One entry per substep of a frame, at a 256-byte stride,
@@ -88,6 +92,16 @@ fn unpack_hinge(a: vec4<u32>, b: vec4<u32>) -> Hinge {
 
 fn unpack_seam(a: vec4<u32>, b: vec4<u32>) -> Seam {
     return Seam(a, bitcast<f32>(b.x), bitcast<f32>(b.y), bitcast<f32>(b.z), b.w);
+}
+
+// The spatial hash bucket of the cell containing x (Teschner et al. 2003 primes).
+fn hash_cell_of(x: vec3<f32>, cell: f32) -> vec3<i32> {
+    return vec3<i32>(floor(x / cell));
+}
+
+fn hash_bucket(c: vec3<i32>, buckets: u32) -> u32 {
+    let u = bitcast<vec3<u32>>(c);
+    return ((u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u)) % buckets;
 }
 
 // Flattened particle index for a 2D dispatch (x up to 65535 workgroups).

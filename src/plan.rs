@@ -18,18 +18,33 @@ pub enum Pass {
     SeamForces,
     /// Euler integration; after every force stage.
     Integrate,
-    /// Particle-versus-body collision through the body's SDF; after integration.
+    /// Self-collision 1/5: zero the spatial hash counts.
+    HashClear,
+    /// Self-collision 2/5: count particles per hash bucket.
+    HashCount,
+    /// Self-collision 3/5: prefix-sum the counts into bucket starts.
+    HashScan,
+    /// Self-collision 4/5: sort particle indices into their buckets.
+    HashFill,
+    /// Self-collision 5/5: particle-particle repulsion.
+    SelfCollide,
+    /// Particle-versus-body collision through the body's SDF; last, so the body wins.
     CollideBody,
 }
 
 impl Pass {
     /// Every stage, in execution order.
-    pub const ALL: [Pass; 6] = [
+    pub const ALL: [Pass; 11] = [
         Pass::SpringForces,
         Pass::BendingForces,
         Pass::WindForces,
         Pass::SeamForces,
         Pass::Integrate,
+        Pass::HashClear,
+        Pass::HashCount,
+        Pass::HashScan,
+        Pass::HashFill,
+        Pass::SelfCollide,
         Pass::CollideBody,
     ];
 
@@ -41,18 +56,29 @@ impl Pass {
             Pass::WindForces => "wind_forces",
             Pass::SeamForces => "seam_forces",
             Pass::Integrate => "integrate",
+            Pass::HashClear => "hash_clear",
+            Pass::HashCount => "hash_count",
+            Pass::HashScan => "hash_scan",
+            Pass::HashFill => "hash_fill",
+            Pass::SelfCollide => "self_collide",
             Pass::CollideBody => "collide_body",
         }
     }
 
     /// Whether the stage adds forces.
     pub fn is_force(self) -> bool {
-        !self.writes_state()
+        matches!(
+            self,
+            Pass::SpringForces | Pass::BendingForces | Pass::WindForces | Pass::SeamForces
+        )
     }
 
     /// Whether the stage writes positions and velocities (the next state).
     pub fn writes_state(self) -> bool {
-        matches!(self, Pass::Integrate | Pass::CollideBody)
+        matches!(
+            self,
+            Pass::Integrate | Pass::SelfCollide | Pass::CollideBody
+        )
     }
 
     /// The stage's WGSL source, without `common.wgsl`.
@@ -63,6 +89,11 @@ impl Pass {
             Pass::WindForces => include_str!("../kernels/wind_forces.wgsl"),
             Pass::SeamForces => include_str!("../kernels/seam_forces.wgsl"),
             Pass::Integrate => include_str!("../kernels/integrate.wgsl"),
+            Pass::HashClear => include_str!("../kernels/hash_clear.wgsl"),
+            Pass::HashCount => include_str!("../kernels/hash_count.wgsl"),
+            Pass::HashScan => include_str!("../kernels/hash_scan.wgsl"),
+            Pass::HashFill => include_str!("../kernels/hash_fill.wgsl"),
+            Pass::SelfCollide => include_str!("../kernels/self_collide.wgsl"),
             Pass::CollideBody => include_str!("../kernels/collide_body.wgsl"),
         }
     }
@@ -77,6 +108,8 @@ pub struct Effects {
     pub wind: bool,
     /// A collision body is present.
     pub body: bool,
+    /// Self-collision is on.
+    pub self_collision: bool,
 }
 
 /// The ordered passes of one substep.
@@ -95,6 +128,11 @@ impl PassPlan {
             Pass::WindForces => effects.wind && !model.triangles.is_empty(),
             Pass::SeamForces => !model.seams.is_empty(),
             Pass::Integrate => true,
+            Pass::HashClear
+            | Pass::HashCount
+            | Pass::HashScan
+            | Pass::HashFill
+            | Pass::SelfCollide => effects.self_collision,
             Pass::CollideBody => effects.body && model.collider.is_some(),
         };
         PassPlan {

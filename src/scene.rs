@@ -24,9 +24,26 @@ struct RawScene {
     world: RawWorld,
     wind: Option<RawWind>,
     body: Option<crate::body::settings::RawBody>,
+    self_collision: Option<RawSelfCollision>,
     solver: RawSolver,
     #[serde(default)]
     output: RawOutput,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSelfCollision {
+    thickness_m: Option<f64>,
+    hash_buckets: Option<i64>,
+}
+
+/// The `[self_collision]` table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SelfCollision {
+    /// Particles keep this far apart, in m (`None`: 0.75 × the mean rest edge length).
+    pub thickness: Option<f32>,
+    /// Hash table size (`None`: the power of two at or above twice the particle count).
+    pub buckets: Option<u32>,
 }
 
 #[derive(Deserialize)]
@@ -401,6 +418,8 @@ pub struct Scene {
     pub air_damping: f32,
     /// Wind, if any.
     pub wind: Option<Wind>,
+    /// Self-collision, if on.
+    pub self_collision: Option<SelfCollision>,
     /// The collision body, if any.
     pub body: Option<crate::body::settings::BodySettings>,
     /// Solver settings.
@@ -917,6 +936,19 @@ impl Scene {
             gravity_start,
             air_damping,
             wind,
+            self_collision: match &raw.self_collision {
+                Some(sc) => Some(SelfCollision {
+                    thickness: match sc.thickness_m {
+                        Some(t) => Some(c.positive("self_collision", "thickness_m", t, "m")?),
+                        None => None,
+                    },
+                    buckets: match sc.hash_buckets {
+                        Some(b) => Some(c.count("self_collision", "hash_buckets", b, 64)?),
+                        None => None,
+                    },
+                }),
+                None => None,
+            },
             body: match &raw.body {
                 Some(b) => Some(crate::body::settings::parse(&c, base, b)?),
                 None => None,
@@ -947,6 +979,7 @@ impl Scene {
             bending: self.fabric.bending_stiffness.is_some(),
             wind: self.wind.is_some(),
             body: self.body.is_some(),
+            self_collision: self.self_collision.is_some(),
         }
     }
 

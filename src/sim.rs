@@ -190,6 +190,21 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     let wind = scene.wind;
     let body = scene.body.as_ref();
     let sdf = model.collider.as_ref().map(|c| &c.sdf);
+    let (self_thickness, hash_buckets) = match &scene.self_collision {
+        Some(sc) => {
+            let mean_edge = model.springs.iter().map(|s| s.rest_length).sum::<f32>()
+                / model.springs.len().max(1) as f32;
+            (
+                sc.thickness.unwrap_or(0.75 * mean_edge),
+                sc.buckets.unwrap_or(
+                    ((2 * model.len()) as u32)
+                        .next_power_of_two()
+                        .clamp(1024, 1 << 22),
+                ),
+            )
+        }
+        None => (0.0, 1),
+    };
     let params = SimParams {
         gravity: if scene.gravity_start > 0.0 {
             [0.0; 4]
@@ -210,6 +225,11 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         friction: body.map_or(0.0, |b| b.friction),
         normal_loss: body.map_or(0.0, |b| b.normal_loss),
         tangential_loss: body.map_or(0.0, |b| b.tangential_loss),
+        self_thickness,
+        // Cells at least as large as the contact distance: all contacts lie in the 27 cells.
+        hash_cell: self_thickness.max(1e-6),
+        hash_buckets,
+        _pad2: 0,
     };
     Ok(Prepared {
         model,

@@ -52,6 +52,10 @@ fn sim_params_layout() {
             ("friction", offset_of!(SimParams, friction)),
             ("normal_loss", offset_of!(SimParams, normal_loss)),
             ("tangential_loss", offset_of!(SimParams, tangential_loss)),
+            ("self_thickness", offset_of!(SimParams, self_thickness)),
+            ("hash_cell", offset_of!(SimParams, hash_cell)),
+            ("hash_buckets", offset_of!(SimParams, hash_buckets)),
+            ("_pad2", offset_of!(SimParams, _pad2)),
         ],
     );
 }

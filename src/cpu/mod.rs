@@ -3,15 +3,25 @@
 
 mod bending_forces;
 mod collide_body;
+mod hash_clear;
+mod hash_count;
+mod hash_fill;
+mod hash_scan;
 mod integrate;
 mod seam_forces;
+mod self_collide;
 mod spring_forces;
 mod wind_forces;
 
 pub use bending_forces::{bending_forces, hinge_force};
 pub use collide_body::{collide_body, collide_particle, sdf_sample, SDF_FAR};
+pub use hash_clear::hash_clear;
+pub use hash_count::{hash_bucket, hash_cell_of, hash_count};
+pub use hash_fill::hash_fill;
+pub use hash_scan::hash_scan;
 pub use integrate::integrate;
 pub use seam_forces::{seam_force, seam_forces};
+pub use self_collide::self_collide;
 pub use spring_forces::spring_forces;
 pub use wind_forces::wind_forces;
 
@@ -37,6 +47,21 @@ pub struct CpuSolver {
     triangles: Option<(Vec<[u32; 4]>, Csr<u32>)>,
     seams: Option<(Vec<Seam>, Csr<u32>)>,
     collider: Option<std::sync::Arc<crate::body::Collider>>,
+    /// The spatial hash of self-collision (public for per-stage parity tests).
+    pub hash: Option<SpatialHash>,
+}
+
+/// The self-collision hash table and the mesh neighbours it skips.
+pub struct SpatialHash {
+    /// Particles per bucket.
+    pub counts: Vec<u32>,
+    /// Bucket starts into `sorted` (one more: the total).
+    pub starts: Vec<u32>,
+    /// Fill cursors.
+    pub cursor: Vec<u32>,
+    /// Particle indices grouped by bucket.
+    pub sorted: Vec<u32>,
+    neighbours: Csr<SpringRef>,
 }
 
 impl CpuSolver {
@@ -61,6 +86,16 @@ impl CpuSolver {
             seams: plan
                 .contains(Pass::SeamForces)
                 .then(|| (model.seams.clone(), model.seam_csr())),
+            hash: plan.contains(Pass::SelfCollide).then(|| {
+                let buckets = params.hash_buckets as usize;
+                SpatialHash {
+                    counts: vec![0; buckets],
+                    starts: vec![0; buckets + 1],
+                    cursor: vec![0; buckets],
+                    sorted: vec![0; n],
+                    neighbours: model.spring_csr(),
+                }
+            }),
             collider: if plan.contains(Pass::CollideBody) {
                 model.collider.clone()
             } else {
@@ -133,6 +168,40 @@ impl CpuSolver {
                     &csr.items,
                     seams,
                 );
+            }
+            Pass::HashClear => {
+                let h = self.hash.as_mut().expect("hash_clear is not in the plan");
+                hash_clear(p, &mut h.counts);
+            }
+            Pass::HashCount => {
+                let h = self.hash.as_mut().expect("hash_count is not in the plan");
+                hash_count(p, &self.pos, &mut h.counts);
+            }
+            Pass::HashScan => {
+                let h = self.hash.as_mut().expect("hash_scan is not in the plan");
+                hash_scan(p, &h.counts, &mut h.starts, &mut h.cursor);
+            }
+            Pass::HashFill => {
+                let h = self.hash.as_mut().expect("hash_fill is not in the plan");
+                hash_fill(p, &self.pos, &mut h.cursor, &mut h.sorted);
+            }
+            Pass::SelfCollide => {
+                let h = self.hash.as_ref().expect("self_collide is not in the plan");
+                let (mut pos_out, mut vel_out) = (self.pos.clone(), self.vel.clone());
+                let csr = &h.neighbours;
+                self_collide(
+                    p,
+                    &self.pos,
+                    &self.vel,
+                    &h.starts,
+                    &h.sorted,
+                    &csr.offsets,
+                    &csr.items,
+                    &mut pos_out,
+                    &mut vel_out,
+                );
+                self.pos = pos_out;
+                self.vel = vel_out;
             }
             Pass::CollideBody => {
                 let c = self

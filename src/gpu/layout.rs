@@ -37,6 +37,14 @@ pub struct SimParams {
     pub normal_loss: f32,
     /// Fraction of tangential relative speed lost in contact.
     pub tangential_loss: f32,
+    /// Self-collision distance in m.
+    pub self_thickness: f32,
+    /// Spatial hash cell size in m.
+    pub hash_cell: f32,
+    /// Spatial hash table size.
+    pub hash_buckets: u32,
+    /// Padding.
+    pub _pad2: u32,
 }
 
 /// Per-substep values (WGSL `SubstepParams`), one per substep at a 256-byte stride.

@@ -29,6 +29,8 @@ enum Binding<'a> {
     Read(&'a TexelArray),
     /// Written with textureStore.
     Write(&'a TexelArray),
+    /// A storage buffer (u32 arrays and atomics of the spatial hash).
+    Storage(&'a wgpu::Buffer, bool),
 }
 
 struct Stage {
@@ -41,6 +43,19 @@ struct Stage {
     /// The force texture this stage writes.
     force_out: Option<usize>,
     uses_substep: bool,
+    /// Workgroups in x and y.
+    dispatch: (u32, u32),
+}
+
+/// Counts, starts and sorted particle indices of the spatial hash, as read back.
+pub type HashTables = (Vec<u32>, Vec<u32>, Vec<u32>);
+
+/// The self-collision spatial hash on the GPU.
+struct HashBuffers {
+    counts: wgpu::Buffer,
+    starts: wgpu::Buffer,
+    cursor: wgpu::Buffer,
+    sorted: wgpu::Buffer,
 }
 
 /// The per-substep uniform array: `capacity` entries at `stride` bytes.
@@ -66,7 +81,7 @@ pub struct GpuSolver {
     substeps: Option<SubstepBuffer>,
     stages: Vec<Stage>,
     resource_labels: Vec<&'static str>,
-    groups: (u32, u32),
+    hash: Option<HashBuffers>,
 }
 
 impl GpuSolver {
@@ -127,6 +142,35 @@ impl GpuSolver {
             }
         });
 
+        let hash = plan.contains(Pass::SelfCollide).then(|| {
+            let buckets = params.hash_buckets as u64;
+            let mut buffer = |label: &'static str, words: u64| {
+                labels.push(label);
+                ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: 4 * words.max(4),
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_SRC
+                        | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            };
+            HashBuffers {
+                counts: buffer("hash_counts", buckets),
+                starts: buffer("hash_starts", buckets + 1),
+                cursor: buffer("hash_cursor", buckets),
+                sorted: buffer("hash_sorted", n as u64),
+            }
+        });
+        let dispatch_for = |threads: u32| {
+            let total = threads.div_ceil(WORKGROUP_SIZE).max(1);
+            let max_x = ctx.device.limits().max_compute_workgroups_per_dimension;
+            if total <= max_x {
+                (total, 1)
+            } else {
+                (max_x, total.div_ceil(max_x))
+            }
+        };
         let mut stages = Vec::new();
         let mut force_index = 0;
         for &pass in &plan.passes {
@@ -171,6 +215,20 @@ impl GpuSolver {
                     add("seam_refs", R32Uint, bytemuck::cast_slice(&csr.items))?;
                     add("seams", Rgba32Uint, bytemuck::cast_slice(&model.seams))?;
                 }
+                Pass::SelfCollide => {
+                    let csr = model.spring_csr();
+                    add(
+                        "self_neighbour_offsets",
+                        R32Uint,
+                        bytemuck::cast_slice(&csr.offsets),
+                    )?;
+                    add(
+                        "self_neighbours",
+                        Rgba32Uint,
+                        bytemuck::cast_slice(&csr.items),
+                    )?;
+                }
+                Pass::HashClear | Pass::HashCount | Pass::HashScan | Pass::HashFill => {}
                 Pass::CollideBody => {
                     let c = model.collider.as_ref().expect("collide_body needs a body");
                     add("sdf", R32Float, bytemuck::cast_slice(&c.sdf.values))?;
@@ -187,6 +245,7 @@ impl GpuSolver {
             // The forces integrate reads: the last force stage's output (zero if none ran).
             let summed = (force_stages + 1) % 2 % forces.len();
             let substep_buf = substeps.as_ref().map(|s| &s.buffer);
+            let hb = || hash.as_ref().expect("self-collision buffers");
             let bindings = |p: usize| -> Vec<Binding> {
                 let o = |k: usize| Binding::Read(&owned[k]);
                 let out = || Binding::Write(&forces[force_out.expect("force stage")]);
@@ -237,6 +296,38 @@ impl GpuSolver {
                         Binding::Write(&pos[1 - p]),
                         Binding::Write(&vel[1 - p]),
                     ],
+                    Pass::HashClear => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Storage(&hb().counts, false),
+                    ],
+                    Pass::HashCount => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Read(&pos[p]),
+                        Binding::Storage(&hb().counts, false),
+                    ],
+                    Pass::HashScan => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Storage(&hb().counts, true),
+                        Binding::Storage(&hb().starts, false),
+                        Binding::Storage(&hb().cursor, false),
+                    ],
+                    Pass::HashFill => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Read(&pos[p]),
+                        Binding::Storage(&hb().cursor, false),
+                        Binding::Storage(&hb().sorted, false),
+                    ],
+                    Pass::SelfCollide => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Read(&pos[p]),
+                        Binding::Read(&vel[p]),
+                        Binding::Storage(&hb().starts, true),
+                        Binding::Storage(&hb().sorted, true),
+                        o(0),
+                        o(1),
+                        Binding::Write(&pos[1 - p]),
+                        Binding::Write(&vel[1 - p]),
+                    ],
                     Pass::Integrate => vec![
                         Binding::Uniform(&params_buf),
                         Binding::Read(&pos[p]),
@@ -253,6 +344,11 @@ impl GpuSolver {
                 ForceInput::Zero
             };
             let force_in = force_in.map(|k| [Binding::Read(&forces[k])]);
+            let dispatch = match pass {
+                Pass::HashClear => dispatch_for(params.hash_buckets),
+                Pass::HashScan => (1, 1),
+                _ => dispatch_for(n as u32),
+            };
             stages.push(build_stage(
                 ctx,
                 pass,
@@ -260,16 +356,10 @@ impl GpuSolver {
                 [&bindings(0), &bindings(1)],
                 force_in.as_ref().map(|b| &b[..]),
                 force_out,
+                dispatch,
             ));
         }
 
-        let total_groups = (n as u32).div_ceil(WORKGROUP_SIZE).max(1);
-        let max_x = ctx.device.limits().max_compute_workgroups_per_dimension;
-        let groups = if total_groups <= max_x {
-            (total_groups, 1)
-        } else {
-            (max_x, total_groups.div_ceil(max_x))
-        };
         Ok(GpuSolver {
             ctx: ctx.clone(),
             params: params_buf,
@@ -283,7 +373,7 @@ impl GpuSolver {
             substeps,
             stages,
             resource_labels: labels,
-            groups,
+            hash,
         })
     }
 
@@ -332,7 +422,7 @@ impl GpuSolver {
                         if let Some(force_in) = &stage.force_in {
                             cpass.set_bind_group(1, force_in, &[]);
                         }
-                        cpass.dispatch_workgroups(self.groups.0, self.groups.1, 1);
+                        cpass.dispatch_workgroups(stage.dispatch.0, stage.dispatch.1, 1);
                         if let Some(out) = stage.force_out {
                             self.last_forces = out;
                         }
@@ -345,6 +435,64 @@ impl GpuSolver {
             self.ctx.queue.submit([encoder.finish()]);
         }
         Ok(())
+    }
+
+    /// Reads back the spatial hash: counts, starts and sorted particle indices (for parity
+    /// tests of the self-collision stages).
+    pub fn hash_tables(&self) -> Result<HashTables, Error> {
+        let h = self
+            .hash
+            .as_ref()
+            .ok_or_else(|| Error::Gpu("self-collision is not in the plan".into()))?;
+        Ok((
+            self.read_u32(&h.counts)?,
+            self.read_u32(&h.starts)?,
+            self.read_u32(&h.sorted)?,
+        ))
+    }
+
+    /// Uploads bucket starts and sorted indices (so `self_collide` can be compared alone).
+    pub fn set_hash(&mut self, starts: &[u32], sorted: &[u32]) {
+        if let Some(h) = &self.hash {
+            self.ctx
+                .queue
+                .write_buffer(&h.starts, 0, bytemuck::cast_slice(starts));
+            self.ctx
+                .queue
+                .write_buffer(&h.sorted, 0, bytemuck::cast_slice(sorted));
+        }
+    }
+
+    fn read_u32(&self, buffer: &wgpu::Buffer) -> Result<Vec<u32>, Error> {
+        let size = buffer.size();
+        let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hash staging"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+        self.ctx.queue.submit([encoder.finish()]);
+        let slice = staging.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.ctx
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(format!("waiting for the GPU failed: {e}")))?;
+        rx.recv()
+            .map_err(|e| Error::Gpu(format!("readback was dropped: {e}")))?
+            .map_err(|e| Error::Gpu(format!("mapping failed: {e}")))?;
+        let out = bytemuck::cast_slice(
+            &slice
+                .get_mapped_range()
+                .map_err(|e| Error::Gpu(format!("reading back failed: {e}")))?,
+        )
+        .to_vec();
+        Ok(out)
     }
 
     /// Reads back the forces the last force stage wrote (for per-stage parity tests).
@@ -414,6 +562,13 @@ fn layout_entry(binding: u32, b: &Binding) -> wgpu::BindGroupLayoutEntry {
             format: t.format,
             view_dimension: wgpu::TextureViewDimension::D2,
         },
+        Binding::Storage(_, read_only) => wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage {
+                read_only: *read_only,
+            },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
     };
     wgpu::BindGroupLayoutEntry {
         binding,
@@ -433,6 +588,7 @@ fn group_entry<'a>(binding: u32, b: &Binding<'a>) -> wgpu::BindGroupEntry<'a> {
             size: NonZeroU64::new(std::mem::size_of::<SubstepParams>() as u64),
         }),
         Binding::Read(t) | Binding::Write(t) => wgpu::BindingResource::TextureView(&t.view),
+        Binding::Storage(buffer, _) => buffer.as_entire_binding(),
     };
     wgpu::BindGroupEntry { binding, resource }
 }
@@ -470,6 +626,7 @@ fn build_stage(
     state_bindings: [&[Binding]; 2],
     force_in: Option<&[Binding]>,
     force_out: Option<usize>,
+    dispatch: (u32, u32),
 ) -> Stage {
     let device = &ctx.device;
     let (layout0, groups) = bind_groups(device, pass.name(), state_bindings);
@@ -501,6 +658,7 @@ fn build_stage(
         bind_groups: groups,
         force_in: force_in.map(|(_, [g])| g),
         force_out,
+        dispatch,
         uses_substep: state_bindings[0]
             .iter()
             .any(|b| matches!(b, Binding::SubstepUniform(_))),

@@ -1,0 +1,8 @@
+//! CPU twin of `kernels/hash_clear.wgsl`.
+
+use crate::gpu::layout::SimParams;
+
+/// Zeroes the per-bucket particle counts.
+pub fn hash_clear(params: &SimParams, counts: &mut [u32]) {
+    counts[..params.hash_buckets as usize].fill(0);
+}
