@@ -99,6 +99,8 @@ pub struct Summary {
     pub seams_closed: usize,
     /// Largest seam pair gap at the last frame, in m (`null` without seams).
     pub max_seam_gap_m: Option<f32>,
+    /// Largest pair gap of each seam (stitch order) at the last frame, in m.
+    pub seam_gaps_m: Vec<f32>,
     /// The first output frame at which every seam was closed.
     pub seams_closed_frame: Option<u32>,
     /// CPU contact strategy against the body (`null` without a body; the GPU uses the SDF).

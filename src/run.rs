@@ -152,6 +152,7 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
             .filter(|&&g| g < prep.seam_closed_gap)
             .count(),
         max_seam_gap_m: stats.seam_gaps.iter().copied().reduce(f32::max),
+        seam_gaps_m: stats.seam_gaps.clone(),
         seams_closed_frame: stats.seams_closed_frame,
         collision_strategy: prep.model.collider.as_ref().map(|c| {
             if solver.backend_name() == "gpu" {
