@@ -53,7 +53,13 @@ pub fn make_solver(
     choice: BackendChoice,
     adapter: &AdapterChoice,
 ) -> Result<(Box<dyn Solver>, Option<String>), Error> {
-    let cpu = || Box::new(CpuSolver::new(&prep.model, prep.params, &prep.plan)) as Box<dyn Solver>;
+    let cpu = || {
+        let mut solver = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+        if prep.cpu_point_triangle {
+            solver.use_point_triangle_reference();
+        }
+        Box::new(solver) as Box<dyn Solver>
+    };
     let gpu = |ctx: &GpuContext| -> Result<Box<dyn Solver>, Error> {
         let batch = prep.substeps as usize;
         Ok(Box::new(GpuSolver::new(

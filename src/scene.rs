@@ -35,6 +35,12 @@ struct RawScene {
 struct RawSelfCollision {
     thickness_m: Option<f64>,
     hash_buckets: Option<i64>,
+    #[serde(default = "default_cpu_reference")]
+    cpu_method: String,
+}
+
+fn default_cpu_reference() -> String {
+    "particles".into()
 }
 
 /// The `[self_collision]` table.
@@ -44,6 +50,9 @@ pub struct SelfCollision {
     pub thickness: Option<f32>,
     /// Hash table size (`None`: the power of two at or above twice the particle count).
     pub buckets: Option<u32>,
+    /// On the CPU backend, use point–triangle impulses (the reference) instead of the particle
+    /// repulsion the GPU runs.
+    pub cpu_point_triangle: bool,
 }
 
 #[derive(Deserialize)]
@@ -945,6 +954,18 @@ impl Scene {
                     buckets: match sc.hash_buckets {
                         Some(b) => Some(c.count("self_collision", "hash_buckets", b, 64)?),
                         None => None,
+                    },
+                    cpu_point_triangle: match sc.cpu_method.as_str() {
+                        "particles" => false,
+                        "point-triangle" => true,
+                        other => {
+                            return Err(c.err(
+                                "self_collision",
+                                "cpu_method",
+                                format!("unknown method {other:?}"),
+                                "use \"particles\" (as the GPU) or \"point-triangle\" (the CPU reference)",
+                            ))
+                        }
                     },
                 }),
                 None => None,

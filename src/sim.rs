@@ -53,6 +53,8 @@ pub struct Prepared {
     pub scene_pins: Vec<u32>,
     /// Fastest speed of any body surface point, in m/s (0 without a moving body).
     pub body_surface_speed: f32,
+    /// CPU self-collision by point–triangle impulses instead of particle repulsion.
+    pub cpu_point_triangle: bool,
     /// Gravity, and the output frame after which it is switched on (0: from the start).
     pub gravity: (glam::Vec3, u32),
 }
@@ -249,6 +251,10 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         attached,
         attach_frames,
         body_surface_speed,
+        cpu_point_triangle: scene
+            .self_collision
+            .as_ref()
+            .is_some_and(|s| s.cpu_point_triangle),
         gravity: (
             scene.gravity,
             (scene.gravity_start / frame_dt).ceil() as u32,

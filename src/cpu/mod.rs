@@ -21,7 +21,7 @@ pub use hash_fill::hash_fill;
 pub use hash_scan::hash_scan;
 pub use integrate::integrate;
 pub use seam_forces::{seam_force, seam_forces};
-pub use self_collide::self_collide;
+pub use self_collide::{point_triangle_impulses, self_collide};
 pub use spring_forces::spring_forces;
 pub use wind_forces::wind_forces;
 
@@ -49,6 +49,10 @@ pub struct CpuSolver {
     collider: Option<std::sync::Arc<crate::body::Collider>>,
     /// The spatial hash of self-collision (public for per-stage parity tests).
     pub hash: Option<SpatialHash>,
+    /// Self-collision by point–triangle impulses (the CPU-only reference) instead of the
+    /// particle repulsion that the GPU runs.
+    point_triangle_reference: bool,
+    self_triangles: Vec<[u32; 3]>,
 }
 
 /// The self-collision hash table and the mesh neighbours it skips.
@@ -86,6 +90,12 @@ impl CpuSolver {
             seams: plan
                 .contains(Pass::SeamForces)
                 .then(|| (model.seams.clone(), model.seam_csr())),
+            point_triangle_reference: false,
+            self_triangles: if plan.contains(Pass::SelfCollide) {
+                model.triangles.clone()
+            } else {
+                Vec::new()
+            },
             hash: plan.contains(Pass::SelfCollide).then(|| {
                 let buckets = params.hash_buckets as usize;
                 SpatialHash {
@@ -185,6 +195,9 @@ impl CpuSolver {
                 let h = self.hash.as_mut().expect("hash_fill is not in the plan");
                 hash_fill(p, &self.pos, &mut h.cursor, &mut h.sorted);
             }
+            Pass::SelfCollide if self.point_triangle_reference => {
+                point_triangle_impulses(p, &self.pos, &mut self.vel, &self.self_triangles);
+            }
             Pass::SelfCollide => {
                 let h = self.hash.as_ref().expect("self_collide is not in the plan");
                 let (mut pos_out, mut vel_out) = (self.pos.clone(), self.vel.clone());
@@ -216,6 +229,11 @@ impl CpuSolver {
 }
 
 impl CpuSolver {
+    /// Switches self-collision to the point–triangle impulse reference (CPU only).
+    pub fn use_point_triangle_reference(&mut self) {
+        self.point_triangle_reference = true;
+    }
+
     /// The collision stage with the body's CPU strategy: the SDF (the GPU's twin) or exact
     /// queries, all driving the same response.
     fn collide(&mut self, c: std::sync::Arc<crate::body::Collider>, step: &SubstepParams) {

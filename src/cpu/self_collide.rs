@@ -69,3 +69,85 @@ pub fn self_collide(
         vel_out[i] = (vi + dv).extend(0.0);
     }
 }
+
+/// The CPU-only reference for self-collision: inelastic point–triangle impulses (after Bridson,
+/// Fedkiw & Anderson 2002). For every particle closer than the thickness to a triangle it does
+/// not belong to and approaching it, an impulse I along the contact normal stops the approach;
+/// the particle gets +I and each triangle vertex −w_i·I (w: barycentric weights of the closest
+/// point), each divided by its own mass, so momentum is conserved exactly. Applied
+/// Gauss–Seidel, particle by particle, to `vel` in place.
+pub fn point_triangle_impulses(
+    params: &SimParams,
+    pos: &[Vec4],
+    vel: &mut [Vec4],
+    triangles: &[[u32; 3]],
+) {
+    use glam::DVec3;
+    use std::collections::HashMap;
+    let h = params.self_thickness;
+    let cell = |x: Vec3| (x / h).floor().as_ivec3();
+    // Each triangle goes into every cell its bounding box, grown by h, overlaps: a particle
+    // within h of a triangle then finds it in its own cell.
+    let mut grid: HashMap<IVec3, Vec<u32>> = HashMap::new();
+    for (t, tri) in triangles.iter().enumerate() {
+        let p = tri.map(|i| pos[i as usize].truncate());
+        let lo = cell(p[0].min(p[1]).min(p[2]) - Vec3::splat(h));
+        let hi = cell(p[0].max(p[1]).max(p[2]) + Vec3::splat(h));
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    grid.entry(IVec3::new(x, y, z)).or_default().push(t as u32);
+                }
+            }
+        }
+    }
+    let inv_mass = |i: u32| pos[i as usize].w as f64;
+    for i in 0..params.num_particles as usize {
+        if pos[i].w == 0.0 {
+            continue;
+        }
+        let xi = pos[i].truncate();
+        let Some(candidates) = grid.get(&cell(xi)) else {
+            continue;
+        };
+        for &t in candidates {
+            let tri = triangles[t as usize];
+            if tri.contains(&(i as u32)) {
+                continue;
+            }
+            let [a, b, c] = tri.map(|v| pos[v as usize].truncate().as_dvec3());
+            let p = xi.as_dvec3();
+            let q = crate::body::closest_point_on_triangle(p, a, b, c);
+            let d = p.distance(q);
+            if d >= h as f64 || d < 1e-9 {
+                continue;
+            }
+            let n = (p - q) / d;
+            let area2 = (b - a).cross(c - a).length();
+            if area2 <= 0.0 {
+                continue;
+            }
+            let w = [
+                (b - q).cross(c - q).length() / area2,
+                (c - q).cross(a - q).length() / area2,
+                (a - q).cross(b - q).length() / area2,
+            ];
+            let v = |k: u32| vel[k as usize].truncate().as_dvec3();
+            let v_tri: DVec3 = (0..3).map(|k| w[k] * v(tri[k])).sum();
+            let vn = (v(i as u32) - v_tri).dot(n);
+            if vn >= 0.0 {
+                continue;
+            }
+            let denominator: f64 =
+                inv_mass(i as u32) + (0..3).map(|k| w[k] * w[k] * inv_mass(tri[k])).sum::<f64>();
+            let impulse = -vn / denominator;
+            let bump = |vel: &mut [Vec4], k: u32, dv: DVec3| {
+                vel[k as usize] += dv.as_vec3().extend(0.0);
+            };
+            bump(vel, i as u32, impulse * inv_mass(i as u32) * n);
+            for k in 0..3 {
+                bump(vel, tri[k], -w[k] * impulse * inv_mass(tri[k]) * n);
+            }
+        }
+    }
+}
