@@ -16,7 +16,13 @@ use drapekit::solver::Solver;
 use glam::DVec2;
 use std::path::Path;
 
-const SHIPPED: [&str; 3] = ["skirt_2panel.json", "tshirt.json", "circle_skirt.json"];
+const SHIPPED: [&str; 5] = [
+    "skirt_2panel.json",
+    "tshirt.json",
+    "circle_skirt.json",
+    "skirt_mannequin.json",
+    "tshirt_apose.json",
+];
 
 fn load(name: &str) -> Pattern {
     Pattern::load(&fixture(&format!("patterns/{name}"))).unwrap()
