@@ -133,7 +133,7 @@ struct RawMesh {
     offset_m: [f64; 3],
 }
 
-fn default_units() -> String {
+pub(crate) fn default_units() -> String {
     "m".into()
 }
 
@@ -497,6 +497,22 @@ impl Checker<'_> {
         InputError::new(self.path, location, problem, fix).at_line(key_line(self.src, table, key))
     }
 
+    /// Metres per file unit for a unit name (`m`, `dm`, `cm`, `mm`).
+    pub(crate) fn units(&self, table: &str, key: &str, name: &str) -> Result<f32, InputError> {
+        match name {
+            "m" => Ok(1.0),
+            "dm" => Ok(0.1),
+            "cm" => Ok(0.01),
+            "mm" => Ok(0.001),
+            other => Err(self.err(
+                table,
+                key,
+                format!("unknown unit {other:?}"),
+                "use one of \"m\", \"dm\", \"cm\", \"mm\"",
+            )),
+        }
+    }
+
     pub(crate) fn finite(&self, table: &str, key: &str, v: f64) -> Result<f32, InputError> {
         if !v.is_finite() {
             return Err(self.err(
@@ -628,27 +644,11 @@ impl Scene {
                     plane,
                 }
             }
-            (None, Some(m), None) => {
-                let scale = match m.units.as_str() {
-                    "m" => 1.0,
-                    "dm" => 0.1,
-                    "cm" => 0.01,
-                    "mm" => 0.001,
-                    other => {
-                        return Err(c.err(
-                            "cloth.mesh",
-                            "units",
-                            format!("unknown unit {other:?}"),
-                            "use one of \"m\", \"dm\", \"cm\", \"mm\"",
-                        ))
-                    }
-                };
-                ClothSource::Mesh {
-                    path: base.join(&m.path),
-                    scale,
-                    offset: c.vec3("cloth.mesh", "offset_m", m.offset_m)?,
-                }
-            }
+            (None, Some(m), None) => ClothSource::Mesh {
+                path: base.join(&m.path),
+                scale: c.units("cloth.mesh", "units", &m.units)?,
+                offset: c.vec3("cloth.mesh", "offset_m", m.offset_m)?,
+            },
             (None, None, Some(p)) => {
                 let t = "cloth.pattern";
                 let stretch = raw.fabric.stretch_stiffness_n_m;

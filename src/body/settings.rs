@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawBody {
     path: Option<String>,
-    #[serde(default = "default_units")]
+    #[serde(default = "crate::scene::default_units")]
     units: String,
     #[serde(default)]
     offset_m: [f64; 3],
@@ -61,9 +61,6 @@ struct RawKeyframe {
     rotation_deg: [f64; 3],
 }
 
-fn default_units() -> String {
-    "m".into()
-}
 fn default_resolution() -> f64 {
     0.01
 }
@@ -162,20 +159,7 @@ pub(crate) fn parse(c: &Checker, base: &Path, b: &RawBody) -> Result<BodySetting
     let source = match (&b.path, b.shape.as_deref()) {
         (Some(p), None) => BodySource::Mesh {
             path: base.join(p),
-            scale: match b.units.as_str() {
-                "m" => 1.0,
-                "dm" => 0.1,
-                "cm" => 0.01,
-                "mm" => 0.001,
-                other => {
-                    return Err(c.err(
-                        t,
-                        "units",
-                        format!("unknown unit {other:?}"),
-                        "use \"m\", \"dm\", \"cm\" or \"mm\"",
-                    ))
-                }
-            },
+            scale: c.units(t, "units", &b.units)?,
             offset: c.vec3(t, "offset_m", b.offset_m)?,
         },
         (None, Some(shape)) => {
