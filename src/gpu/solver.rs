@@ -475,6 +475,15 @@ impl GpuSolver {
         encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
         self.ctx.queue.submit([encoder.finish()]);
         let slice = staging.slice(..);
+        self.map_read(slice, |bytes| bytemuck::cast_slice(bytes).to_vec())
+    }
+
+    /// Maps a MAP_READ slice once the submitted work is done and hands its bytes to `read`.
+    fn map_read<T>(
+        &self,
+        slice: wgpu::BufferSlice,
+        read: impl FnOnce(&[u8]) -> T,
+    ) -> Result<T, Error> {
         let (tx, rx) = std::sync::mpsc::channel();
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
@@ -485,13 +494,13 @@ impl GpuSolver {
             .map_err(|e| Error::Gpu(format!("waiting for the GPU failed: {e}")))?;
         rx.recv()
             .map_err(|e| Error::Gpu(format!("readback was dropped: {e}")))?
-            .map_err(|e| Error::Gpu(format!("mapping failed: {e}")))?;
-        let out = bytemuck::cast_slice(
+            .map_err(|e| Error::Gpu(format!("mapping the staging buffer failed: {e}")))?;
+        let out = read(
             &slice
                 .get_mapped_range()
-                .map_err(|e| Error::Gpu(format!("reading back failed: {e}")))?,
-        )
-        .to_vec();
+                .map_err(|e| Error::Gpu(format!("reading the staging buffer failed: {e}")))?,
+        );
+        slice.buffer().unmap();
         Ok(out)
     }
 
@@ -508,23 +517,8 @@ impl GpuSolver {
             at += a.padded_bytes();
         }
         self.ctx.queue.submit([encoder.finish()]);
-        let slice = self.staging.slice(..at);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        self.ctx
-            .device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::Gpu(format!("waiting for the GPU failed: {e}")))?;
-        rx.recv()
-            .map_err(|e| Error::Gpu(format!("readback was dropped: {e}")))?
-            .map_err(|e| Error::Gpu(format!("mapping the staging buffer failed: {e}")))?;
-        let out = {
-            let view = slice
-                .get_mapped_range()
-                .map_err(|e| Error::Gpu(format!("reading the staging buffer failed: {e}")))?;
-            let all: &[Vec4] = bytemuck::cast_slice(&view);
+        self.map_read(self.staging.slice(..at), |bytes| {
+            let all: &[Vec4] = bytemuck::cast_slice(bytes);
             let mut start = 0;
             arrays
                 .iter()
@@ -535,9 +529,7 @@ impl GpuSolver {
                     data
                 })
                 .collect()
-        };
-        self.staging.unmap();
-        Ok(out)
+        })
     }
 }
 
