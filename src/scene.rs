@@ -265,6 +265,18 @@ fn default_every() -> i64 {
     1
 }
 
+/// What `Scene::build_model` makes.
+pub struct BuiltCloth {
+    /// The model, attached particles pinned.
+    pub model: ClothModel,
+    /// The sewn pattern, for `[cloth.pattern]` scenes.
+    pub garment: Option<Garment>,
+    /// Particles the scene's `[[pins]]` hold for the whole run.
+    pub scene_pins: Vec<u32>,
+    /// Particles held by `attach_labels` until they are released.
+    pub attached: Vec<u32>,
+}
+
 /// Where the cloth's triangles come from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ClothSource {
@@ -1141,16 +1153,18 @@ impl Scene {
     }
 
     /// Builds the cloth model (mesh, fabric, pins and seams) and, for patterns, the garment.
-    pub fn build_model(&self) -> Result<(ClothModel, Option<Garment>), InputError> {
+    pub fn build_model(&self) -> Result<BuiltCloth, InputError> {
         let garment = self.build_garment()?;
         let mesh = match &garment {
             Some(g) => g.mesh.clone(),
             None => self.build_mesh()?,
         };
-        let mut pinned = self.pinned_particles(&mesh)?;
-        if let Some(g) = &garment {
-            pinned.extend(self.attached_particles(g)?);
-        }
+        let scene_pins = self.pinned_particles(&mesh)?;
+        let attached = match &garment {
+            Some(g) => self.attached_particles(g)?,
+            None => Vec::new(),
+        };
+        let pinned: Vec<u32> = scene_pins.iter().chain(&attached).copied().collect();
         let mut model = ClothModel::from_mesh(&mesh, &self.fabric, &pinned);
         if let Some(b) = &self.body {
             let c = Checker {
@@ -1216,6 +1230,11 @@ impl Scene {
                 })
                 .collect();
         }
-        Ok((model, garment))
+        Ok(BuiltCloth {
+            model,
+            garment,
+            scene_pins,
+            attached,
+        })
     }
 }

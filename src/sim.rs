@@ -8,7 +8,7 @@ use crate::metrics;
 use crate::model::ClothModel;
 use crate::pattern::garment::Garment;
 use crate::plan::PassPlan;
-use crate::scene::{ClothSource, Scene, Wind};
+use crate::scene::{BuiltCloth, ClothSource, Scene, Wind};
 use crate::solver::{ParticleState, Solver};
 use serde::Serialize;
 use std::time::Instant;
@@ -78,16 +78,14 @@ impl Prepared {
     }
 }
 
-fn scene_mesh(model: &ClothModel) -> crate::mesh::TriMesh {
-    crate::mesh::TriMesh {
-        positions: model.positions.clone(),
-        triangles: model.triangles.clone(),
-    }
-}
-
 /// Builds the model and plan and chooses the substep count.
 pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
-    let (model, garment) = scene.build_model()?;
+    let BuiltCloth {
+        model,
+        garment,
+        scene_pins,
+        attached,
+    } = scene.build_model()?;
     let (seam_closed_gap, attach_frames) = match &scene.cloth {
         ClothSource::Pattern {
             closed_gap,
@@ -95,11 +93,6 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
             ..
         } => (*closed_gap, *attach_frames),
         _ => (0.0, 0),
-    };
-    let scene_pins = scene.pinned_particles(&scene_mesh(&model))?;
-    let attached = match &garment {
-        Some(g) => scene.attached_particles(g)?,
-        None => Vec::new(),
     };
     let plan = PassPlan::new(&model, scene.effects());
     let s = &scene.solver;
