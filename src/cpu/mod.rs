@@ -66,6 +66,8 @@ pub struct SpatialHash {
     /// Particle indices grouped by bucket.
     pub sorted: Vec<u32>,
     neighbours: Csr<SpringRef>,
+    pos_out: Vec<Vec4>,
+    vel_out: Vec<Vec4>,
 }
 
 impl CpuSolver {
@@ -104,6 +106,8 @@ impl CpuSolver {
                     cursor: vec![0; buckets],
                     sorted: vec![0; n],
                     neighbours: model.spring_csr(),
+                    pos_out: vec![Vec4::ZERO; n],
+                    vel_out: vec![Vec4::ZERO; n],
                 }
             }),
             collider: if plan.contains(Pass::CollideBody) {
@@ -199,9 +203,10 @@ impl CpuSolver {
                 point_triangle_impulses(p, &self.pos, &mut self.vel, &self.self_triangles);
             }
             Pass::SelfCollide => {
-                let h = self.hash.as_ref().expect("self_collide is not in the plan");
-                let (mut pos_out, mut vel_out) = (self.pos.clone(), self.vel.clone());
+                let h = self.hash.as_mut().expect("self_collide is not in the plan");
                 let csr = &h.neighbours;
+                // Writes the next state into the scratch pair, then swaps, as the kernel
+                // ping-pongs its textures (no allocation per substep).
                 self_collide(
                     p,
                     &self.pos,
@@ -210,11 +215,11 @@ impl CpuSolver {
                     &h.sorted,
                     &csr.offsets,
                     &csr.items,
-                    &mut pos_out,
-                    &mut vel_out,
+                    &mut h.pos_out,
+                    &mut h.vel_out,
                 );
-                self.pos = pos_out;
-                self.vel = vel_out;
+                std::mem::swap(&mut self.pos, &mut h.pos_out);
+                std::mem::swap(&mut self.vel, &mut h.vel_out);
             }
             Pass::CollideBody => {
                 let c = self
