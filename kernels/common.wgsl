@@ -22,7 +22,7 @@ struct SimParams {
     air_damping: f32,            // 1/s, a = -air_damping * v
     air_density: f32,            // kg/m³, wind drag
     drag_coefficient: f32,       // 1, wind drag
-    _pad0: u32,
+    sewing_rate: f32,            // 1/s, fraction of each seam's open gap closed per second
     _pad1: u32,
     sdf_origin: vec4<f32>,       // xyz: body-frame position of SDF node (0,0,0) in m, w: node spacing in m
     sdf_dims: vec4<u32>,         // xyz: SDF nodes along x, y, z; w: unused
@@ -72,14 +72,15 @@ struct Hinge {
 }
 
 // A seam pair: vertex v.x is pulled towards the partner point (1 − weight)·x[v.y] + weight·x[v.z]
-// on the other edge by a zero-rest-length spring; the partner's ends take the reaction.
-// Uploaded as two rgba32uint texels, floats as their bits.
+// on the other edge by a spring whose rest gap shrinks from open_gap to 0 at
+// SimParams.sewing_rate (0 from the start when open_gap is 0); the partner's ends take the
+// reaction. Uploaded as two rgba32uint texels, floats as their bits.
 struct Seam {
     v: vec4<u32>,                // x: seam vertex, y, z: partner segment, w: unused
     weight: f32,                 // of v.z
     stiffness: f32,              // N/m
     damping: f32,                // N·s/m, on the relative velocity
-    _pad0: u32,
+    open_gap: f32,               // m, rest gap at time 0
 }
 
 fn unpack_spring(t: vec4<u32>) -> SpringRef {
@@ -91,7 +92,7 @@ fn unpack_hinge(a: vec4<u32>, b: vec4<u32>) -> Hinge {
 }
 
 fn unpack_seam(a: vec4<u32>, b: vec4<u32>) -> Seam {
-    return Seam(a, bitcast<f32>(b.x), bitcast<f32>(b.y), bitcast<f32>(b.z), b.w);
+    return Seam(a, bitcast<f32>(b.x), bitcast<f32>(b.y), bitcast<f32>(b.z), bitcast<f32>(b.w));
 }
 
 // The spatial hash bucket of the cell containing x (Teschner et al. 2003 primes).

@@ -70,6 +70,7 @@ struct RawPattern {
     #[serde(default = "default_particle_distance")]
     particle_distance_m: f64,
     seam_stiffness_n_m: Option<f64>,
+    seam_sewing_time_s: Option<f64>,
     #[serde(default = "default_closed_gap")]
     seam_closed_gap_m: f64,
     #[serde(default)]
@@ -303,6 +304,9 @@ pub enum ClothSource {
         options: GarmentOptions,
         /// Seam pair stiffness in N/m.
         seam_stiffness: f32,
+        /// Time over which seam rest gaps shrink from the placed gap to 0, in s; 0: seams pull
+        /// with their full stiffness from the start.
+        sewing_time: f32,
         /// A seam counts as closed when every pair's gap is below this, in m.
         closed_gap: f32,
         /// Fold angles θ0 in radians by stitch index (others fold to 0: flat).
@@ -692,6 +696,10 @@ impl Scene {
                         Some(k) => c.positive(t, "seam_stiffness_n_m", k, "N/m")?,
                         // Twice the fabric's stretch stiffness (validated with the fabric).
                         None => (2.0 * stretch) as f32,
+                    },
+                    sewing_time: match p.seam_sewing_time_s {
+                        Some(v) => c.positive(t, "seam_sewing_time_s", v, "s")?,
+                        None => 0.0,
                     },
                     closed_gap: c.positive(t, "seam_closed_gap_m", p.seam_closed_gap_m, "m")?,
                     folds: {
@@ -1177,6 +1185,7 @@ impl Scene {
             Some(g),
             ClothSource::Pattern {
                 seam_stiffness,
+                sewing_time,
                 folds,
                 ..
             },
@@ -1218,6 +1227,8 @@ impl Scene {
                     let m = |i: u32| model.masses[i as usize];
                     let partner_mass = (1.0 - p.w) * m(p.b[0]) + p.w * m(p.b[1]);
                     let reduced = m(p.a) * partner_mass / (m(p.a) + partner_mass);
+                    let x = |i: u32| model.positions[i as usize];
+                    let partner = x(p.b[0]).lerp(x(p.b[1]), p.w);
                     Seam {
                         v: [p.a, p.b[0], p.b[1], 0],
                         weight: p.w,
@@ -1225,7 +1236,12 @@ impl Scene {
                         damping: 2.0
                             * self.fabric.damping_ratio
                             * (*seam_stiffness * reduced).sqrt(),
-                        _pad0: 0,
+                        // With a sewing time the pair starts at rest where it was placed.
+                        open_gap: if *sewing_time > 0.0 {
+                            x(p.a).distance(partner)
+                        } else {
+                            0.0
+                        },
                     }
                 })
                 .collect();

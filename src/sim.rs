@@ -86,13 +86,14 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         scene_pins,
         attached,
     } = scene.build_model()?;
-    let (seam_closed_gap, attach_frames) = match &scene.cloth {
+    let (seam_closed_gap, sewing_time, attach_frames) = match &scene.cloth {
         ClothSource::Pattern {
             closed_gap,
+            sewing_time,
             attach_frames,
             ..
-        } => (*closed_gap, *attach_frames),
-        _ => (0.0, 0),
+        } => (*closed_gap, *sewing_time, *attach_frames),
+        _ => (0.0, 0.0, 0),
     };
     let plan = PassPlan::new(&model, scene.effects());
     let s = &scene.solver;
@@ -212,7 +213,11 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         air_damping: scene.air_damping,
         air_density: wind.map_or(0.0, |w| w.air_density),
         drag_coefficient: wind.map_or(0.0, |w| w.drag_coefficient),
-        _pad0: 0,
+        sewing_rate: if sewing_time > 0.0 {
+            1.0 / sewing_time
+        } else {
+            0.0
+        },
         _pad1: 0,
         sdf_origin: sdf.map_or([0.0, 0.0, 0.0, 1.0], |g| g.origin.extend(g.cell).to_array()),
         sdf_dims: sdf.map_or([0; 4], |g| [g.dims[0], g.dims[1], g.dims[2], 0]),

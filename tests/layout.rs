@@ -44,7 +44,7 @@ fn sim_params_layout() {
             ("air_damping", offset_of!(SimParams, air_damping)),
             ("air_density", offset_of!(SimParams, air_density)),
             ("drag_coefficient", offset_of!(SimParams, drag_coefficient)),
-            ("_pad0", offset_of!(SimParams, _pad0)),
+            ("sewing_rate", offset_of!(SimParams, sewing_rate)),
             ("_pad1", offset_of!(SimParams, _pad1)),
             ("sdf_origin", offset_of!(SimParams, sdf_origin)),
             ("sdf_dims", offset_of!(SimParams, sdf_dims)),
@@ -111,7 +111,7 @@ fn seam_layout() {
             ("weight", offset_of!(Seam, weight)),
             ("stiffness", offset_of!(Seam, stiffness)),
             ("damping", offset_of!(Seam, damping)),
-            ("_pad0", offset_of!(Seam, _pad0)),
+            ("open_gap", offset_of!(Seam, open_gap)),
         ],
     );
 }

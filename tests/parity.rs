@@ -84,6 +84,20 @@ fn parity_seam_forces() {
 }
 
 #[test]
+fn parity_seam_forces_while_sewing() {
+    // With a 100 s sewing time every rest gap is still ~99.9% of its placed gap at this step,
+    // so the 5 mm perturbation leaves about half the pairs inside their rest gap (no spring)
+    // and half outside it: both branches of the rest-gap force run.
+    let mut scene = Scene::load(&fixture("scenes/tshirt_sew.toml")).unwrap();
+    if let drapekit::scene::ClothSource::Pattern { sewing_time, .. } = &mut scene.cloth {
+        *sewing_time = 100.0;
+    }
+    let prep = prepare(&scene).unwrap();
+    assert!(prep.model.seams.iter().all(|s| s.open_gap > 0.05));
+    pass_parity_in(prep, Pass::SeamForces);
+}
+
+#[test]
 fn parity_integrate() {
     pass_parity(Pass::Integrate);
 }

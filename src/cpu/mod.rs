@@ -20,7 +20,7 @@ pub use hash_count::{hash_bucket, hash_cell_of, hash_count};
 pub use hash_fill::hash_fill;
 pub use hash_scan::hash_scan;
 pub use integrate::integrate;
-pub use seam_forces::{seam_force, seam_forces};
+pub use seam_forces::{rest_gap, seam_force, seam_forces};
 pub use self_collide::{point_triangle_impulses, self_collide};
 pub use spring_forces::spring_forces;
 pub use wind_forces::wind_forces;
@@ -175,6 +175,7 @@ impl CpuSolver {
                 let (seams, csr) = self.seams.as_ref().expect("seam_forces is not in the plan");
                 seam_forces(
                     p,
+                    step,
                     &self.pos,
                     &self.vel,
                     &mut self.force,

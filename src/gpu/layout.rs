@@ -21,8 +21,8 @@ pub struct SimParams {
     pub air_density: f32,
     /// Drag coefficient for wind drag.
     pub drag_coefficient: f32,
-    /// Padding to a 16-byte multiple.
-    pub _pad0: u32,
+    /// Fraction of each seam's open gap closed per second (1 / sewing time), in 1/s.
+    pub sewing_rate: f32,
     /// Padding to a 16-byte multiple.
     pub _pad1: u32,
     /// Body-frame position of SDF node (0, 0, 0) in m (xyz); w: node spacing in m.
@@ -118,8 +118,8 @@ pub struct Seam {
     pub stiffness: f32,
     /// Damping on the relative velocity in N·s/m.
     pub damping: f32,
-    /// Padding.
-    pub _pad0: u32,
+    /// Rest gap at time 0 in m; it shrinks to 0 at `SimParams::sewing_rate`.
+    pub open_gap: f32,
 }
 
 /// Integrator codes shared with `integrate.wgsl`.

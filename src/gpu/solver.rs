@@ -124,7 +124,9 @@ impl GpuSolver {
             mapped_at_creation: false,
         });
 
-        let needs_substep = plan.contains(Pass::WindForces) || plan.contains(Pass::CollideBody);
+        let needs_substep = [Pass::WindForces, Pass::SeamForces, Pass::CollideBody]
+            .into_iter()
+            .any(|p| plan.contains(p));
         let substeps = needs_substep.then(|| {
             labels.push("substep_params");
             let align = ctx.device.limits().min_uniform_buffer_offset_alignment as u64;
@@ -278,6 +280,7 @@ impl GpuSolver {
                     ],
                     Pass::SeamForces => vec![
                         Binding::Uniform(&params_buf),
+                        Binding::SubstepUniform(substep_buf.expect("seams need substep params")),
                         Binding::Read(&pos[p]),
                         Binding::Read(&vel[p]),
                         out(),
