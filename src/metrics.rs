@@ -51,19 +51,34 @@ pub fn seam_gaps(pairs: &[SeamPair], stitches: usize, positions: &[Vec4]) -> Vec
     gaps
 }
 
-/// The deepest any particle lies inside the body, measured against the exact mesh, in m
-/// (0 when none is inside). `body` is the body's pose at the state's time.
-pub fn max_penetration(
+/// Every particle's signed distance to the body's exact surface in m (negative inside).
+/// `body` is the body's pose at the state's time.
+pub fn body_distances(
     collider: &crate::body::Collider,
     body: &crate::body::motion::BodyState,
     positions: &[Vec4],
-) -> f32 {
+) -> Vec<f32> {
     let inverse = body.rotation.inverse();
     positions
         .iter()
         .map(|p| {
-            let local = inverse * (p.truncate() - body.translation);
-            (-collider.exact.query(local).0).max(0.0)
+            collider
+                .exact
+                .query(inverse * (p.truncate() - body.translation))
+                .0
         })
-        .fold(0.0, f32::max)
+        .collect()
+}
+
+/// The deepest any particle lies inside the body, in m (0 when none is inside).
+pub fn max_penetration(distances: &[f32]) -> f32 {
+    distances.iter().map(|d| -d).fold(0.0, f32::max)
+}
+
+/// Particles resting on the body: outside it and within `reach` (m) of its surface.
+pub fn body_contacts(distances: &[f32], reach: f32) -> usize {
+    distances
+        .iter()
+        .filter(|&&d| d >= 0.0 && d <= reach)
+        .count()
 }

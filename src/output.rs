@@ -107,6 +107,9 @@ pub struct Summary {
     pub collision_strategy: Option<&'static str>,
     /// Deepest particle inside the body at any output frame, measured against the exact mesh.
     pub max_penetration_m: Option<f32>,
+    /// Particles resting on the body at the last frame: outside it and within the collision
+    /// thickness plus 1 mm of its exact surface.
+    pub body_contacts: Option<usize>,
     /// The body's SDF: grid, bake time, memory, cache.
     pub sdf: Option<crate::body::sdf::BakeReport>,
     /// Fastest body surface point in m/s, and how far it moves in one substep in m.

@@ -109,17 +109,29 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
     let mut stats = RunStats::default();
     let every = scene.output.every;
     let uv = prep.garment.as_ref().map(|g| &g.uv[..]);
+    let write_frame = |frame: u32, positions: &[glam::Vec4]| -> Result<String, Error> {
+        let name = format!("frame_{frame:04}.obj");
+        write_atomic(
+            &out_dir.join(&name),
+            obj_text(positions, &prep.model.triangles, uv).as_bytes(),
+        )?;
+        Ok(name)
+    };
+    // The last frame is always written, also when the settle rule ends the run between
+    // `every` frames: it is the result.
+    let mut unwritten: Option<(u32, Vec<glam::Vec4>)> = None;
     let result = simulate(&prep, solver.as_mut(), &mut stats, |frame, state| {
         if scene.output.obj && frame % every == 0 {
-            let name = format!("frame_{frame:04}.obj");
-            write_atomic(
-                &out_dir.join(&name),
-                obj_text(&state.positions, &prep.model.triangles, uv).as_bytes(),
-            )?;
-            outputs.push(name);
+            outputs.push(write_frame(frame, &state.positions)?);
+            unwritten = None;
+        } else if scene.output.obj {
+            unwritten = Some((frame, state.positions.clone()));
         }
         Ok(())
     });
+    if let (Ok(()), Some((frame, positions))) = (&result, unwritten) {
+        outputs.push(write_frame(frame, &positions)?);
+    }
     outputs.push("summary.json".to_string());
     let substeps_run = stats.frames_run as f64 * prep.substeps as f64;
     let summary = Summary {
@@ -172,6 +184,7 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
             .collider
             .as_ref()
             .map(|_| stats.max_penetration_m),
+        body_contacts: prep.model.collider.as_ref().map(|_| stats.body_contacts),
         sdf: prep.model.collider.as_ref().map(|c| c.bake.clone()),
         body_surface_speed_m_s: prep
             .model
