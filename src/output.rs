@@ -105,6 +105,8 @@ pub struct Summary {
     pub seams_closed_frame: Option<u32>,
     /// CPU contact strategy against the body (`null` without a body; the GPU uses the SDF).
     pub collision_strategy: Option<&'static str>,
+    /// Whether cloth edges were also tested against the body's edges (CPU only).
+    pub edge_contacts: Option<bool>,
     /// Deepest particle inside the body at any output frame, measured against the exact mesh.
     pub max_penetration_m: Option<f32>,
     /// Particles resting on the body at the last frame: outside it and within the collision

@@ -96,7 +96,16 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
     if let Some(note) = &backend_note {
         eprintln!("drapekit: {note}");
     }
-    for w in &prep.warnings {
+    let mut warnings = prep.warnings.clone();
+    let wants_edges = (prep.model.collider.as_ref()).is_some_and(|c| c.edges.is_some());
+    if wants_edges && solver.backend_name() == "gpu" {
+        warnings.push(
+            "edge_contacts is CPU only: the GPU backend tests particles against the SDF \
+             (use --backend cpu for cloth-edge against body-edge contacts)"
+                .into(),
+        );
+    }
+    for w in &warnings {
         eprintln!("drapekit: warning: {w}");
     }
     let out_dir = opts
@@ -179,6 +188,8 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
                 c.strategy.name()
             }
         }),
+        edge_contacts: (prep.model.collider.as_ref())
+            .map(|c| c.edges.is_some() && solver.backend_name() == "cpu"),
         max_penetration_m: prep
             .model
             .collider
@@ -197,7 +208,7 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
         released_after_frame: stats.released_after_frame,
         finite: stats.finite,
         settled: stats.settled.clone(),
-        warnings: prep.warnings.clone(),
+        warnings,
         error: result.as_ref().err().map(|e| e.to_string()),
         outputs,
     };

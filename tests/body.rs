@@ -474,3 +474,133 @@ fn rotating_skirt_stays_on_and_out_of_the_mannequin() {
     // It stays on the hips (hip line ≈ 0.82 to 0.87 m) through the turns instead of falling.
     assert!(lowest_waist > 0.8, "the waistband fell to {lowest_waist} m");
 }
+
+/// Whether segment a→b passes through the axis-aligned box `lo`..`hi` (slab test).
+fn segment_hits_box(a: Vec3, b: Vec3, lo: Vec3, hi: Vec3) -> bool {
+    let (mut t0, mut t1) = (0.0f32, 1.0f32);
+    let d = b - a;
+    for k in 0..3 {
+        if d[k].abs() < 1e-12 {
+            if a[k] < lo[k] || a[k] > hi[k] {
+                return false;
+            }
+            continue;
+        }
+        let (mut ta, mut tb) = ((lo[k] - a[k]) / d[k], (hi[k] - a[k]) / d[k]);
+        if ta > tb {
+            std::mem::swap(&mut ta, &mut tb);
+        }
+        t0 = t0.max(ta);
+        t1 = t1.min(tb);
+        if t0 > t1 {
+            return false;
+        }
+    }
+    true
+}
+
+#[test]
+fn body_edges_find_the_nearest_edge_of_a_box() {
+    // A 4 mm bar along z with its top at y = 0.502; a cloth edge across it 1 mm above the top
+    // is 1 mm from both top edges, straight above them.
+    let bar = shapes::cuboid(Vec3::new(0.0, 0.5, 0.0), Vec3::new(0.002, 0.002, 0.3));
+    let edges = drapekit::body::edges::BodyEdges::new(&bar);
+    assert_eq!(
+        edges.len(),
+        18,
+        "a triangulated box has 12 sides and 6 face diagonals"
+    );
+    let exact = ExactBody::new(&bar).unwrap();
+    let inside = |p: Vec3| exact.query(p).0 < 0.0;
+    let (a, b) = (Vec3::new(-0.05, 0.503, 0.01), Vec3::new(0.05, 0.503, 0.01));
+    let c = edges.deepest(a, b, 0.003, inside).expect("within reach");
+    // f32 positions near 0.5 m carry 6e-8 m rounding; the distances are 1 mm.
+    assert!((c.distance - 0.001).abs() < 1e-6, "{c:?}");
+    assert!(c.normal.distance(Vec3::Y) < 1e-4, "{c:?}");
+    assert!((c.point.y - 0.502).abs() < 1e-6 && (c.point.x.abs() - 0.002).abs() < 1e-6);
+    // Out of reach: nothing.
+    assert!(edges.deepest(a, b, 0.0009, inside).is_none());
+    // Through the bar: inside, pushed back out along the edge's outward normal.
+    let (a, b) = (Vec3::new(-0.05, 0.5, 0.01), Vec3::new(0.05, 0.5, 0.01));
+    let c = edges.deepest(a, b, 0.003, inside).expect("through the bar");
+    assert!(c.distance < 0.0, "{c:?}");
+}
+
+#[test]
+fn an_edge_contact_moves_the_contact_point_out_and_stops_it() {
+    use drapekit::body::edges::EdgeContact;
+    use drapekit::gpu::layout::{SimParams, SubstepParams};
+    let params = SimParams {
+        thickness: 0.003,
+        friction: 0.5,
+        ..SimParams::default()
+    };
+    let step = SubstepParams {
+        body_x: [1.0, 0.0, 0.0, 0.0],
+        body_y: [0.0, 1.0, 0.0, 0.0],
+        body_z: [0.0, 0.0, 1.0, 0.0],
+        ..SubstepParams::default()
+    };
+    // Equal masses; the contact sits a quarter of the way along, touching the body edge.
+    let mut pos = vec![
+        glam::Vec4::new(0.0, 0.0, 0.0, 10.0),
+        glam::Vec4::new(0.04, 0.0, 0.0, 10.0),
+    ];
+    let mut vel = vec![glam::Vec4::new(0.1, -1.0, 0.0, 0.0); 2];
+    let c = EdgeContact {
+        s: 0.25,
+        point: Vec3::new(0.01, 0.0, 0.0),
+        normal: Vec3::Y,
+        distance: 0.0,
+    };
+    drapekit::cpu::collide_edge(&params, &step, &mut pos, &mut vel, [0, 1], &c);
+    let lerp = |v: &[glam::Vec4]| v[0].truncate().lerp(v[1].truncate(), c.s);
+    // The contact point ends one thickness out (f32 rounding of mm-sized sums: 1e-9 m).
+    assert!((lerp(&pos) - Vec3::new(0.01, 0.003, 0.0)).length() < 1e-9);
+    // The ends share the move 3 : 1, like their weights 0.75 and 0.25.
+    assert!((pos[0].y / pos[1].y - 3.0).abs() < 1e-5);
+    // The contact point's inward speed is gone, and its tangential speed 0.1 m/s drops by
+    // μ · 1 m/s = 0.5 m/s, i.e. to 0 (Coulomb, static).
+    assert!(lerp(&vel).length() < 1e-6, "{:?}", lerp(&vel));
+}
+
+#[test]
+fn cloth_edges_catch_on_a_thin_bar_only_with_edge_contacts() {
+    // drape_bar.toml: particles 5 cm apart fall onto a 4 mm bar midway between two columns, so
+    // no particle ever comes within the thickness of the bar; only edge contacts can hold it.
+    let (lo, hi) = (Vec3::new(-0.002, 0.498, -0.3), Vec3::new(0.002, 0.502, 0.3));
+    for edge_contacts in [true, false] {
+        let mut scene = Scene::load(&fixture("scenes/drape_bar.toml")).unwrap();
+        scene.body.as_mut().unwrap().edge_contacts = edge_contacts;
+        let prep = prepare(&scene).unwrap();
+        let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+        let mut crossing = 0;
+        let mut last = Vec::new();
+        drapekit::sim::simulate(&prep, &mut cpu, &mut Default::default(), |_, s| {
+            let p = |i: u32| s.positions[i as usize].truncate();
+            crossing += (prep.model.springs.iter())
+                .filter(|sp| segment_hits_box(p(sp.ends[0]), p(sp.ends[1]), lo, hi))
+                .count();
+            last = s.positions.clone();
+            Ok(())
+        })
+        .unwrap();
+        let lowest = last.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
+        let highest = last.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max);
+        if edge_contacts {
+            assert_eq!(crossing, 0, "cloth edges passed through the bar");
+            // Hanging over the bar: the far columns hang at most half the cloth's width (about
+            // 0.2 m, plus 2% stretch) below its top.
+            assert!(
+                lowest > 0.502 - 0.225 * 1.02 && highest > 0.502,
+                "{lowest}..{highest}"
+            );
+        } else {
+            // Without them the cloth falls straight through: 1 s of fall takes it metres down.
+            assert!(
+                highest < lo.y,
+                "the cloth stayed up at {highest} m without edge contacts"
+            );
+        }
+    }
+}

@@ -2,6 +2,7 @@
 //! generated (sphere, box, capsule), with a baked signed distance field and rigid motion.
 
 pub mod bvh;
+pub mod edges;
 pub mod exact;
 pub mod motion;
 pub mod sdf;
@@ -77,6 +78,8 @@ pub struct Collider {
     pub strategy: Strategy,
     /// The hierarchy of a BVH strategy.
     pub bvh: Option<bvh::BodyBvh>,
+    /// The body's edges, when the CPU path also tests cloth edges against them.
+    pub edges: Option<edges::BodyEdges>,
     /// How the SDF was obtained.
     pub bake: sdf::BakeReport,
 }

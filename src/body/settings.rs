@@ -40,6 +40,8 @@ pub(crate) struct RawBody {
     tangential_loss: f64,
     #[serde(default = "default_strategy")]
     collision_strategy: String,
+    #[serde(default)]
+    edge_contacts: bool,
     motion: Option<String>,
     #[serde(default = "default_turn_angle")]
     turn_angle_deg: f64,
@@ -146,6 +148,8 @@ pub struct BodySettings {
     pub tangential_loss: f32,
     /// CPU contact strategy.
     pub strategy: Strategy,
+    /// Whether the CPU path also tests cloth edges against body edges.
+    pub edge_contacts: bool,
     /// Rigid motion.
     pub motion: Motion,
 }
@@ -316,6 +320,7 @@ pub(crate) fn parse(c: &Checker, base: &Path, b: &RawBody) -> Result<BodySetting
         normal_loss: fraction("normal_loss", b.normal_loss)?,
         tangential_loss: fraction("tangential_loss", b.tangential_loss)?,
         strategy,
+        edge_contacts: b.edge_contacts,
         motion,
     })
 }
@@ -397,6 +402,9 @@ impl BodySettings {
             .map(|kind| super::bvh::BodyBvh::new(&body.mesh, kind));
         Ok(Collider {
             bvh,
+            edges: self
+                .edge_contacts
+                .then(|| super::edges::BodyEdges::new(&body.mesh)),
             body,
             sdf,
             exact,

@@ -120,3 +120,79 @@ pub fn collide_body(
         vel[i] = v.extend(0.0);
     }
 }
+
+/// The CPU-only edge response for cloth edge `e` in contact `c` (body frame), the edge
+/// counterpart of `collide_particle`: the contact point moves out to the thickness and its
+/// velocity relative to the body is treated as a particle's. Both corrections are shared
+/// between the edge's ends with weights (1 − s) and s over their inverse masses, the smallest
+/// change that moves the contact point by the full amount.
+pub fn collide_edge(
+    params: &SimParams,
+    step: &SubstepParams,
+    pos: &mut [Vec4],
+    vel: &mut [Vec4],
+    e: [u32; 2],
+    c: &crate::body::edges::EdgeContact,
+) {
+    let (i, j) = (e[0] as usize, e[1] as usize);
+    let w = [1.0 - c.s, c.s];
+    let inv_mass = [pos[i].w, pos[j].w];
+    let denom = w[0] * w[0] * inv_mass[0] + w[1] * w[1] * inv_mass[1];
+    if denom <= 0.0 || c.distance >= params.thickness {
+        return;
+    }
+    let share = [w[0] * inv_mass[0] / denom, w[1] * inv_mass[1] / denom];
+    let (bx, by, bz) = (v3(step.body_x), v3(step.body_y), v3(step.body_z));
+    let n = bx * c.normal.x + by * c.normal.y + bz * c.normal.z;
+    let push = (params.thickness - c.distance) * n;
+    for (k, &p) in [i, j].iter().enumerate() {
+        pos[p] += (share[k] * push).extend(0.0);
+    }
+    let t = v3(step.body_translation);
+    let x = pos[i].truncate().lerp(pos[j].truncate(), c.s);
+    let v = vel[i].truncate().lerp(vel[j].truncate(), c.s);
+    let v_body = v3(step.body_velocity) + v3(step.body_angular_velocity).cross(x - t);
+    let v_rel = v - v_body;
+    let vn = v_rel.dot(n);
+    let mut vt = v_rel - vn * n;
+    let vn_new = if vn < 0.0 {
+        let vt_len = vt.length();
+        if vt_len > 0.0 {
+            vt *= (1.0 - params.friction * (-vn) / vt_len).max(0.0);
+        }
+        0.0
+    } else {
+        vn * (1.0 - params.normal_loss)
+    };
+    vt *= 1.0 - params.tangential_loss;
+    let change = vt + vn_new * n - v_rel;
+    for (k, &p) in [i, j].iter().enumerate() {
+        vel[p] += (share[k] * change).extend(0.0);
+    }
+}
+
+/// Every cloth edge against the body's edges (CPU only; after the particle pass), one contact
+/// per edge: its deepest. Does nothing unless the collider carries its edges.
+pub fn collide_edges(
+    params: &SimParams,
+    step: &SubstepParams,
+    pos: &mut [Vec4],
+    vel: &mut [Vec4],
+    cloth_edges: &[[u32; 2]],
+    collider: &crate::body::Collider,
+) {
+    let Some(edges) = &collider.edges else { return };
+    let (bx, by, bz) = (v3(step.body_x), v3(step.body_y), v3(step.body_z));
+    let t = v3(step.body_translation);
+    let to_body = |x: Vec4| {
+        let d = x.truncate() - t;
+        Vec3::new(bx.dot(d), by.dot(d), bz.dot(d))
+    };
+    let inside = |x: Vec3| collider.exact.query(x).0 < 0.0;
+    for &e in cloth_edges {
+        let (a, b) = (to_body(pos[e[0] as usize]), to_body(pos[e[1] as usize]));
+        if let Some(contact) = edges.deepest(a, b, params.thickness, inside) {
+            collide_edge(params, step, pos, vel, e, &contact);
+        }
+    }
+}

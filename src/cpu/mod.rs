@@ -14,7 +14,9 @@ mod spring_forces;
 mod wind_forces;
 
 pub use bending_forces::{bending_forces, hinge_force};
-pub use collide_body::{collide_body, collide_particle, sdf_sample, SDF_FAR};
+pub use collide_body::{
+    collide_body, collide_edge, collide_edges, collide_particle, sdf_sample, SDF_FAR,
+};
 pub use hash_clear::hash_clear;
 pub use hash_count::{hash_bucket, hash_cell_of, hash_count};
 pub use hash_fill::hash_fill;
@@ -53,6 +55,8 @@ pub struct CpuSolver {
     /// particle repulsion that the GPU runs.
     point_triangle_reference: bool,
     self_triangles: Vec<[u32; 3]>,
+    /// The cloth's edges (its stretch springs), when the body takes edge contacts.
+    cloth_edges: Vec<[u32; 2]>,
 }
 
 /// The self-collision hash table and the mesh neighbours it skips.
@@ -93,6 +97,10 @@ impl CpuSolver {
                 .contains(Pass::SeamForces)
                 .then(|| (model.seams.clone(), model.seam_csr())),
             point_triangle_reference: false,
+            cloth_edges: match &model.collider {
+                Some(c) if c.edges.is_some() => model.springs.iter().map(|s| s.ends).collect(),
+                _ => Vec::new(),
+            },
             self_triangles: if plan.contains(Pass::SelfCollide) {
                 model.triangles.clone()
             } else {
@@ -267,6 +275,9 @@ impl CpuSolver {
                     self.vel[i] = v.extend(0.0);
                 }
             }
+        }
+        if c.edges.is_some() {
+            collide_edges(p, step, &mut self.pos, &mut self.vel, &self.cloth_edges, &c);
         }
     }
 }
