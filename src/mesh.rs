@@ -78,12 +78,7 @@ impl TriMesh {
 
     /// Loads a triangulated (or polygonal) OBJ, scaling coordinates by `scale` to metres.
     pub fn load_obj(path: &Path, scale: f32, key: &str) -> Result<Self, InputError> {
-        let options = tobj::LoadOptions {
-            triangulate: true,
-            single_index: true,
-            ..Default::default()
-        };
-        let (models, _materials) = tobj::load_obj(path, &options).map_err(|e| {
+        let (models, _materials) = tobj::load_obj(path, &Self::obj_options()).map_err(|e| {
             InputError::new(
                 path,
                 key,
@@ -91,8 +86,45 @@ impl TriMesh {
                 "check that the path exists (it is relative to the scene file) and is a text OBJ",
             )
         })?;
+        Self::from_obj_models(&models, path, scale, key)
+    }
+
+    /// Parses OBJ text held in memory (`name` stands for its path in errors).
+    pub fn parse_obj(text: &str, name: &Path, scale: f32, key: &str) -> Result<Self, InputError> {
+        let mut reader = std::io::BufReader::new(text.as_bytes());
+        let (models, _materials) =
+            tobj::load_obj_buf(
+                &mut reader,
+                &Self::obj_options(),
+                |_| Ok(Default::default()),
+            )
+            .map_err(|e| {
+                InputError::new(
+                    name,
+                    key,
+                    format!("cannot parse the mesh: {e}"),
+                    "give a text OBJ",
+                )
+            })?;
+        Self::from_obj_models(&models, name, scale, key)
+    }
+
+    fn obj_options() -> tobj::LoadOptions {
+        tobj::LoadOptions {
+            triangulate: true,
+            single_index: true,
+            ..Default::default()
+        }
+    }
+
+    fn from_obj_models(
+        models: &[tobj::Model],
+        path: &Path,
+        scale: f32,
+        key: &str,
+    ) -> Result<Self, InputError> {
         let mut mesh = TriMesh::default();
-        for model in &models {
+        for model in models {
             let base = mesh.positions.len() as u32;
             for p in model.mesh.positions.chunks_exact(3) {
                 mesh.positions.push(Vec3::new(p[0], p[1], p[2]) * scale);

@@ -604,3 +604,39 @@ fn cloth_edges_catch_on_a_thin_bar_only_with_edge_contacts() {
         }
     }
 }
+
+#[test]
+fn the_built_in_mannequin_is_the_shipped_file_standing_on_its_feet() {
+    let feet = Vec3::new(0.1, 0.0, -0.2);
+    let built_in = shapes::mannequin(feet);
+    let file = TriMesh::load_obj(&fixture("bodies/mannequin.obj"), 1.0, "path").unwrap();
+    assert_eq!(built_in.triangles, file.triangles);
+    let lowest = file
+        .positions
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::INFINITY, f32::min);
+    let shift = feet - Vec3::new(0.0, lowest, 0.0);
+    // One f32 addition of a < 1 m shift to < 1 m coordinates: within 2^-24 · 2 m ≈ 1.2e-7 m.
+    for (a, b) in built_in.positions.iter().zip(&file.positions) {
+        assert!(a.distance(*b + shift) <= 1.2e-7, "{a} vs {}", *b + shift);
+    }
+    let lowest_now = (built_in.positions.iter())
+        .map(|p| p.y)
+        .fold(f32::INFINITY, f32::min);
+    assert_eq!(lowest_now, feet.y);
+    // A scene can ask for it by name.
+    let dir = std::env::temp_dir().join(format!("drapekit-mannequin-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("scene.toml");
+    std::fs::write(
+        &path,
+        "[cloth.grid]\nwidth_m = 0.2\nheight_m = 0.2\ncolumns = 3\nrows = 3\n\
+         center_m = [0.0, 1.8, 0.0]\n[fabric]\ndensity_kg_m2 = 0.15\n\
+         stretch_stiffness_n_m = 300.0\n[body]\nshape = \"mannequin\"\n[solver]\nframes = 1\n",
+    )
+    .unwrap();
+    let prep = prepare(&Scene::load(&path).unwrap()).unwrap();
+    let c = prep.model.collider.as_ref().unwrap();
+    assert_eq!(c.body.mesh.positions.len(), 13_380);
+}

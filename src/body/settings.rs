@@ -114,6 +114,11 @@ pub enum BodySource {
         /// Half extents in m.
         half: Vec3,
     },
+    /// The shipped mannequin, feet at this point.
+    Mannequin {
+        /// Where it stands, in m.
+        feet: Vec3,
+    },
     /// A capsule along y.
     Capsule {
         /// Centre in m.
@@ -201,6 +206,7 @@ pub(crate) fn parse(c: &Checker, base: &Path, b: &RawBody) -> Result<BodySetting
                         ),
                     }
                 }
+                "mannequin" => BodySource::Mannequin { feet: center },
                 "capsule" => BodySource::Capsule {
                     center,
                     radius: c.positive(t, "radius_m", need("radius_m", b.radius_m)?, "m")?,
@@ -216,7 +222,7 @@ pub(crate) fn parse(c: &Checker, base: &Path, b: &RawBody) -> Result<BodySetting
                         t,
                         "shape",
                         format!("unknown shape {other:?}"),
-                        "use \"sphere\", \"box\" or \"capsule\", or give path = an OBJ body",
+                        "use \"mannequin\", \"sphere\", \"box\" or \"capsule\", or give path = an OBJ body",
                     ))
                 }
             }
@@ -336,6 +342,7 @@ impl BodySettings {
             } => return Body::load(path, *scale, *offset, "body.path"),
             BodySource::Sphere { center, radius } => shapes::sphere(*center, *radius, SHAPE_RINGS),
             BodySource::Cuboid { center, half } => shapes::cuboid(*center, *half),
+            BodySource::Mannequin { feet } => shapes::mannequin(*feet),
             BodySource::Capsule {
                 center,
                 radius,

@@ -1,4 +1,5 @@
-//! Analytic bodies for tests, as closed outward-oriented triangle meshes.
+//! Generated bodies as closed, outward-oriented triangle meshes: analytic shapes for tests, and
+//! the shipped mannequin.
 
 use crate::mesh::TriMesh;
 use glam::Vec3;
@@ -91,4 +92,23 @@ pub fn cuboid(center: Vec3, half: Vec3) -> TriMesh {
         positions,
         triangles,
     }
+}
+
+/// The shipped CC0 MakeHuman mannequin (`fixtures/bodies/mannequin.obj`, built into the
+/// binary so that scenes anywhere can use it), standing with its lowest point at `feet`'s
+/// height and its axis through `feet`'s x and z.
+pub fn mannequin(feet: Vec3) -> TriMesh {
+    const OBJ: &str = include_str!("../../fixtures/bodies/mannequin.obj");
+    let name = std::path::Path::new("fixtures/bodies/mannequin.obj");
+    let mut mesh = TriMesh::parse_obj(OBJ, name, 1.0, "body.shape")
+        .expect("the shipped mannequin parses (tested)");
+    let lowest = mesh
+        .positions
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::INFINITY, f32::min);
+    for p in &mut mesh.positions {
+        *p += feet - Vec3::new(0.0, lowest, 0.0);
+    }
+    mesh
 }
