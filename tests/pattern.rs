@@ -281,22 +281,21 @@ fn sewing_scene(pattern: &str, frames: u32) -> Scene {
     scene
 }
 
-fn closes_on_both_backends(scene: &Scene, within_frames: u32) {
-    let prep = prepare(scene).unwrap();
+/// A CPU solver for `prep`, and a GPU one when an adapter exists.
+fn both_backends(prep: &drapekit::sim::Prepared) -> Vec<Box<dyn Solver>> {
     let cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
     let mut backends: Vec<Box<dyn Solver>> = vec![Box::new(cpu)];
     if let Some(ctx) = common::gpu() {
-        let gpu = GpuSolver::new(
-            ctx,
-            &prep.model,
-            prep.params,
-            &prep.plan,
-            prep.substeps as usize,
-        )
-        .unwrap();
+        let batch = prep.substeps as usize;
+        let gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, batch).unwrap();
         backends.push(Box::new(gpu));
     }
-    for mut solver in backends {
+    backends
+}
+
+fn closes_on_both_backends(scene: &Scene, within_frames: u32) {
+    let prep = prepare(scene).unwrap();
+    for mut solver in both_backends(&prep) {
         let (closed, gaps) = sew(scene, solver.as_mut());
         let name = solver.backend_name();
         eprintln!("{name}: closed at frame {closed:?}, final gaps {gaps:?}");
@@ -587,21 +586,6 @@ fn a_sewing_time_draws_every_seam_shut_over_that_time() {
         *t = sewing_time;
     }
     let prep = prepare(&scene).unwrap();
-    let mut backends: Vec<Box<dyn Solver>> = vec![Box::new(CpuSolver::new(
-        &prep.model,
-        prep.params,
-        &prep.plan,
-    ))];
-    if let Some(ctx) = common::gpu() {
-        let gpu = GpuSolver::new(
-            ctx,
-            &prep.model,
-            prep.params,
-            &prep.plan,
-            prep.substeps as usize,
-        );
-        backends.push(Box::new(gpu.unwrap()));
-    }
     let open: Vec<f32> = prep.model.seams.iter().map(|s| s.open_gap).collect();
     let widest = open.iter().copied().fold(0.0, f32::max);
     assert!(
@@ -609,7 +593,7 @@ fn a_sewing_time_draws_every_seam_shut_over_that_time() {
         "the placed shirt's widest seam gap is {widest} m"
     );
     let k = prep.model.seams[0].stiffness;
-    for mut solver in backends {
+    for mut solver in both_backends(&prep) {
         let name = solver.backend_name();
         let (gaps, speeds) = sewing_trace(&scene, solver.as_mut());
         for (f, frame_gaps) in gaps.iter().enumerate() {
