@@ -126,20 +126,18 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
         )?;
         Ok(name)
     };
-    // The last frame is always written, also when the settle rule ends the run between
-    // `every` frames: it is the result.
-    let mut unwritten: Option<(u32, Vec<glam::Vec4>)> = None;
     let result = simulate(&prep, solver.as_mut(), &mut stats, |frame, state| {
         if scene.output.obj && frame % every == 0 {
             outputs.push(write_frame(frame, &state.positions)?);
-            unwritten = None;
-        } else if scene.output.obj {
-            unwritten = Some((frame, state.positions.clone()));
         }
         Ok(())
     });
-    if let (Ok(()), Some((frame, positions))) = (&result, unwritten) {
-        outputs.push(write_frame(frame, &positions)?);
+    // The last frame is the result: it is written also when the run ended between `every`
+    // frames (the settle rule, or a frame count that is not a multiple). The solver still
+    // holds its positions.
+    let last = stats.frames_run;
+    if result.is_ok() && scene.output.obj && last % every != 0 {
+        outputs.push(write_frame(last, &solver.state()?.positions)?);
     }
     outputs.push("summary.json".to_string());
     let substeps_run = stats.frames_run as f64 * prep.substeps as f64;

@@ -291,3 +291,24 @@ fn tshirt_drape_sews_a_tshirt_that_rests_on_the_mannequin() {
     // Not torn or tangled: the largest spring strain was 0.30 in the recorded run.
     assert!(f("max_edge_strain") < 0.5, "{summary:#}");
 }
+
+#[test]
+fn the_last_frame_is_written_between_output_frames() {
+    // drape_bar writes every 6th frame; a run of 8 frames still ends with frame 8 on disk.
+    let out = out_dir("last_frame");
+    let r = drapekit(&[
+        "run",
+        common::fixture("scenes/drape_bar.toml").to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--frames",
+        "8",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    for f in ["frame_0000.obj", "frame_0006.obj", "frame_0008.obj"] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    assert!(!out.join("frame_0007.obj").exists());
+}
