@@ -225,18 +225,17 @@ fn parity_collide_body() {
     assert!(dv <= 1e-5, "velocities differ by {dv} m/s");
 }
 
+/// The touching sphere's cloth moved by up to 5 mm: particles on both sides of the thickness.
+fn recorded_state(prep: &drapekit::sim::Prepared) -> drapekit::solver::ParticleState {
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    common::perturbed(&cpu.state().unwrap(), 9, 5e-3, 0.0)
+}
+
 #[test]
 fn strategies_find_the_same_contacts() {
     let prep = touching_sphere();
     let c = prep.model.collider.as_ref().unwrap();
-    let state = common::perturbed(
-        &CpuSolver::new(&prep.model, prep.params, &prep.plan)
-            .state()
-            .unwrap(),
-        9,
-        5e-3,
-        0.0,
-    );
+    let state = recorded_state(&prep);
     let thickness = prep.params.thickness;
     let mut contacts = [Vec::new(), Vec::new(), Vec::new()];
     for (i, p) in state.positions.iter().enumerate() {
@@ -371,14 +370,7 @@ fn bvh_strategies_agree_with_exact_on_a_recorded_state() {
     use drapekit::body::bvh::{BodyBvh, VolumeKind};
     let prep = touching_sphere();
     let c = prep.model.collider.as_ref().unwrap();
-    let state = common::perturbed(
-        &CpuSolver::new(&prep.model, prep.params, &prep.plan)
-            .state()
-            .unwrap(),
-        9,
-        5e-3,
-        0.0,
-    );
+    let state = recorded_state(&prep);
     let thickness = prep.params.thickness;
     // The mannequin too: a real, non-convex body with thin parts.
     let mannequin = Body::load(
