@@ -1,5 +1,5 @@
 // Shared structs and helpers, prepended to every stage in kernels/.
-// Keep in sync with src/gpu/layout.rs (tests/layout.rs checks sizes and offsets via naga).
+// Keep in sync with src/model/layout.rs (tests/layout.rs checks sizes and offsets via naga).
 
 const WORKGROUP_SIZE: u32 = 64u;
 

@@ -3,14 +3,16 @@
 //! The criterion benches in `benches/` use the same model builder, so the two agree on what
 //! "a substep at 256²" means.
 
+use crate::atomic_file::write_atomic;
 use crate::cpu::CpuSolver;
 use crate::error::Error;
-use crate::gpu::layout::{SimParams, SubstepParams, INTEGRATOR_SYMPLECTIC};
 use crate::gpu::{AdapterChoice, GpuContext, GpuSolver};
 use crate::mesh::{GridPlane, TriMesh};
-use crate::model::{ClothModel, Fabric};
-use crate::output::write_atomic;
+use crate::model::layout::{SimParams, SubstepParams, INTEGRATOR_SYMPLECTIC};
+use crate::model::ClothModel;
 use crate::plan::{Effects, PassPlan};
+use crate::plot::Series;
+use crate::scene::Fabric;
 use crate::solver::Solver;
 use glam::Vec3;
 use std::path::Path;
@@ -195,7 +197,13 @@ pub fn run_cli(
     write_atomic(&out.join("bench.csv"), csv.as_bytes())?;
     write_atomic(&out.join("bench.md"), md.as_bytes())?;
     let title = format!("Whole substep, {substeps} substeps per batch");
-    crate::plot::throughput_svg(&rows, &title, &out.join("bench.svg"))?;
+    crate::plot::log_log_svg(
+        &throughput_series(&rows),
+        &title,
+        "particles",
+        "particle-substeps / s",
+        &out.join("bench.svg"),
+    )?;
     println!(
         "wrote {}, {} and {}",
         out.join("bench.csv").display(),
@@ -203,4 +211,21 @@ pub fn run_cli(
         out.join("bench.svg").display()
     );
     Ok(())
+}
+
+/// One line per backend and device: throughput against particle count.
+fn throughput_series(rows: &[BenchRow]) -> Vec<Series> {
+    let mut series: Vec<Series> = Vec::new();
+    for r in rows {
+        let name = format!("{}: {}", r.backend, r.device);
+        let point = (r.particles as f64, r.particle_substeps_per_second);
+        match series.iter_mut().find(|s| s.name == name) {
+            Some(s) => s.points.push(point),
+            None => series.push(Series {
+                name,
+                points: vec![point],
+            }),
+        }
+    }
+    series
 }

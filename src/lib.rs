@@ -3,10 +3,17 @@
 //!
 //! The data path: [`scene::Scene`] → [`model::ClothModel`] → [`plan::PassPlan`] →
 //! a [`solver::Solver`] ([`gpu::GpuSolver`] or [`cpu::CpuSolver`]) → frames and a summary.
+//!
+//! Modules form layers that import only downward (README.md, "Architecture"): ground
+//! (`error`, `check`, `atomic_file`) → geometry (`mesh`, `pattern`, `body`) → `scene` →
+//! `model` → `plan` and `solver` → backends (`cpu`, `gpu`) and `metrics` → `sim` → outputs
+//! (`run`, `output`, `bench`, `plot`) → the CLI.
 #![warn(missing_docs)]
 
+pub mod atomic_file;
 pub mod bench;
 pub mod body;
+pub mod check;
 pub mod cpu;
 pub mod error;
 pub mod gpu;

@@ -2,6 +2,7 @@
 //! and both backends build pipelines, buffers and CPU data only for the stages in the plan.
 
 use crate::model::ClothModel;
+pub use crate::scene::Effects;
 use serde::Serialize;
 
 /// One simulation stage: one kernel in `kernels/`, one CPU twin in `src/cpu/`.
@@ -97,19 +98,6 @@ impl Pass {
             Pass::CollideBody => include_str!("../kernels/collide_body.wgsl"),
         }
     }
-}
-
-/// What a scene asks for beyond its mesh.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Effects {
-    /// Bending stiffness is set.
-    pub bending: bool,
-    /// A wind section is present.
-    pub wind: bool,
-    /// A collision body is present.
-    pub body: bool,
-    /// Self-collision is on.
-    pub self_collision: bool,
 }
 
 /// The ordered passes of one substep.

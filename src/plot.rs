@@ -1,25 +1,30 @@
 //! SVG plots of benchmark tables (plotters' SVG backend: no fonts or system libraries needed).
 
-use crate::bench::BenchRow;
+use crate::atomic_file::write_atomic;
 use crate::error::Error;
-use crate::output::write_atomic;
 use plotters::prelude::*;
 use std::path::Path;
 
-/// Plots throughput (particle-substeps/s) against particle count on log–log axes, one line per
-/// backend and device, and writes it atomically to `path`.
-pub fn throughput_svg(rows: &[BenchRow], title: &str, path: &Path) -> Result<(), Error> {
-    let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
-    for r in rows {
-        let name = format!("{}: {}", r.backend, r.device);
-        let point = (r.particles as f64, r.particle_substeps_per_second);
-        match series.iter_mut().find(|(n, _)| *n == name) {
-            Some((_, points)) => points.push(point),
-            None => series.push((name, vec![point])),
-        }
-    }
-    let (x_lo, x_hi) = range(rows.iter().map(|r| r.particles as f64));
-    let (y_lo, y_hi) = range(rows.iter().map(|r| r.particle_substeps_per_second));
+/// One named line of points.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Series {
+    /// Legend text.
+    pub name: String,
+    /// (x, y) points, both positive (log axes).
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Plots each series as a line with markers on log–log axes and writes the SVG atomically.
+pub fn log_log_svg(
+    series: &[Series],
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    path: &Path,
+) -> Result<(), Error> {
+    let all = || series.iter().flat_map(|s| s.points.iter());
+    let (x_lo, x_hi) = range(all().map(|p| p.0));
+    let (y_lo, y_hi) = range(all().map(|p| p.1));
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (900, 560)).into_drawing_area();
@@ -39,20 +44,20 @@ pub fn throughput_svg(rows: &[BenchRow], title: &str, path: &Path) -> Result<(),
             .map_err(draw)?;
         chart
             .configure_mesh()
-            .x_desc("particles")
-            .y_desc("particle-substeps / s")
+            .x_desc(x_desc)
+            .y_desc(y_desc)
             .y_label_formatter(&|y| format!("{y:.1e}"))
             .draw()
             .map_err(draw)?;
-        for (k, (name, points)) in series.iter().enumerate() {
+        for (k, s) in series.iter().enumerate() {
             let color = Palette99::pick(k).to_rgba();
             chart
-                .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
+                .draw_series(LineSeries::new(s.points.clone(), color.stroke_width(2)))
                 .map_err(draw)?
-                .label(name.clone())
+                .label(s.name.clone())
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color));
             chart
-                .draw_series(points.iter().map(|&p| Circle::new(p, 4, color.filled())))
+                .draw_series(s.points.iter().map(|&p| Circle::new(p, 4, color.filled())))
                 .map_err(draw)?;
         }
         chart

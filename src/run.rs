@@ -1,10 +1,11 @@
 //! `drapekit run`: scene → prepared run → backend → frames and summary on disk.
 
+use crate::atomic_file::write_atomic;
 use crate::cpu::CpuSolver;
 use crate::error::Error;
-use crate::gpu::layout::INTEGRATOR_EXPLICIT;
 use crate::gpu::{AdapterChoice, GpuContext, GpuSolver};
-use crate::output::{obj_text, write_atomic, Summary};
+use crate::model::layout::INTEGRATOR_EXPLICIT;
+use crate::output::{obj_text, Summary};
 use crate::scene::Scene;
 use crate::sim::{prepare, simulate, Prepared, RunStats};
 use crate::solver::Solver;

@@ -3,12 +3,13 @@
 
 use crate::body::motion::BodyState;
 use crate::error::Error;
-use crate::gpu::layout::{SimParams, SubstepParams};
 use crate::metrics;
+use crate::model::layout::{SimParams, SubstepParams};
+use crate::model::BuiltCloth;
 use crate::model::ClothModel;
 use crate::pattern::garment::Garment;
 use crate::plan::PassPlan;
-use crate::scene::{BuiltCloth, ClothSource, Scene, Wind};
+use crate::scene::{ClothSource, Scene, Wind};
 use crate::solver::{ParticleState, Solver};
 use serde::Serialize;
 use std::time::Instant;

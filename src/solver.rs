@@ -1,7 +1,7 @@
 //! What both backends offer the run loop: advance a batch of substeps, read the state back.
 
 use crate::error::Error;
-use crate::gpu::layout::SubstepParams;
+use crate::model::layout::SubstepParams;
 use glam::Vec4;
 use serde::Serialize;
 
@@ -40,7 +40,7 @@ pub trait Solver {
     /// Replaces positions (w = inverse mass) and velocities, e.g. to release attachments.
     fn set_state(&mut self, state: &ParticleState);
     /// Replaces the run-constant parameters between frames (e.g. to switch gravity on).
-    fn set_params(&mut self, params: &crate::gpu::layout::SimParams);
+    fn set_params(&mut self, params: &crate::model::layout::SimParams);
     /// Waits until submitted work has finished, without reading anything back (for timing).
     fn finish(&mut self) -> Result<(), Error> {
         Ok(())

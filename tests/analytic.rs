@@ -5,8 +5,10 @@ mod common;
 
 use common::{fixture, gpu};
 use drapekit::cpu::CpuSolver;
-use drapekit::gpu::layout::{SimParams, SubstepParams, INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC};
 use drapekit::gpu::GpuSolver;
+use drapekit::model::layout::{
+    SimParams, SubstepParams, INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC,
+};
 use drapekit::model::{ClothModel, Spring};
 use drapekit::plan::{Effects, Pass, PassPlan};
 use drapekit::scene::Scene;

@@ -258,7 +258,7 @@ fn strategies_find_the_same_contacts() {
         }
         // The SDF is within half a cell of the exact distance inside its grid; outside it
         // (the grid spans the body plus a margin above the thickness) it reports no contact.
-        if ds == drapekit::cpu::SDF_FAR {
+        if ds == drapekit::body::sdf::SDF_FAR {
             assert!(de > thickness, "particle {i} at {de} m is off the grid");
         } else {
             assert!(
@@ -521,7 +521,7 @@ fn body_edges_find_the_nearest_edge_of_a_box() {
 #[test]
 fn an_edge_contact_moves_the_contact_point_out_and_stops_it() {
     use drapekit::body::edges::EdgeContact;
-    use drapekit::gpu::layout::{SimParams, SubstepParams};
+    use drapekit::model::layout::{SimParams, SubstepParams};
     let params = SimParams {
         thickness: 0.003,
         friction: 0.5,

@@ -1,8 +1,8 @@
-//! The Rust mirrors in src/gpu/layout.rs match kernels/common.wgsl byte for byte: sizes and
+//! The Rust mirrors in src/model/layout.rs match kernels/common.wgsl byte for byte: sizes and
 //! every field offset, as naga lays the WGSL structs out.
 
 use drapekit::gpu::kernels::{validate_wgsl, COMMON_WGSL};
-use drapekit::gpu::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams};
+use drapekit::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams};
 use std::mem::{offset_of, size_of};
 
 fn wgsl_layout(name: &str) -> (u32, Vec<(String, u32)>) {
@@ -148,7 +148,7 @@ fn wgsl_const(name: &str) -> u32 {
 
 #[test]
 fn shared_constants_match() {
-    use drapekit::gpu::layout::{TEXELS_PER_ROW, WORKGROUP_SIZE};
+    use drapekit::model::layout::{TEXELS_PER_ROW, WORKGROUP_SIZE};
     assert_eq!(wgsl_const("TEXELS_PER_ROW"), TEXELS_PER_ROW);
     assert_eq!(wgsl_const("WORKGROUP_SIZE"), WORKGROUP_SIZE);
     // Texture rows are copied to and from buffers, which needs 256-byte aligned rows.

@@ -4,8 +4,8 @@ mod common;
 
 use common::{fixture, gpu, max_abs_diff, max_norm, perturbed};
 use drapekit::cpu::CpuSolver;
-use drapekit::gpu::layout::{SubstepParams, INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC};
 use drapekit::gpu::GpuSolver;
+use drapekit::model::layout::{SubstepParams, INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC};
 use drapekit::plan::Pass;
 use drapekit::scene::Scene;
 use drapekit::sim::{prepare, simulate, substep_params, Prepared, RunStats};

@@ -6,7 +6,6 @@ pub mod edges;
 pub mod exact;
 pub mod motion;
 pub mod sdf;
-pub mod settings;
 pub mod shapes;
 
 use crate::error::InputError;

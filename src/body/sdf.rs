@@ -3,10 +3,50 @@
 
 use super::exact::ExactBody;
 use super::Body;
-use crate::cpu::sdf_sample;
 use glam::{Vec3, Vec4};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+/// φ outside the grid: no contact.
+pub const SDF_FAR: f32 = 1e30;
+
+/// Trilinear φ (w) and its gradient (xyz), as `kernels/collide_body.wgsl` samples it, at body-frame point `p` of a grid with `dims` nodes
+/// from `origin` at `cell` spacing (x fastest).
+pub fn sdf_sample(values: &[f32], dims: [u32; 3], origin: Vec3, cell: f32, p: Vec3) -> Vec4 {
+    let g = (p - origin) / cell;
+    let last = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) - Vec3::ONE;
+    if g.cmplt(Vec3::ZERO).any() || g.cmpge(last).any() {
+        return Vec4::new(0.0, 0.0, 0.0, SDF_FAR);
+    }
+    let c = g.floor().as_uvec3();
+    let f = g - g.floor();
+    let node = |i: u32, j: u32, k: u32| values[(i + dims[0] * (j + dims[1] * k)) as usize];
+    let c000 = node(c.x, c.y, c.z);
+    let c100 = node(c.x + 1, c.y, c.z);
+    let c010 = node(c.x, c.y + 1, c.z);
+    let c110 = node(c.x + 1, c.y + 1, c.z);
+    let c001 = node(c.x, c.y, c.z + 1);
+    let c101 = node(c.x + 1, c.y, c.z + 1);
+    let c011 = node(c.x, c.y + 1, c.z + 1);
+    let c111 = node(c.x + 1, c.y + 1, c.z + 1);
+    let x00 = c000 + f.x * (c100 - c000);
+    let x10 = c010 + f.x * (c110 - c010);
+    let x01 = c001 + f.x * (c101 - c001);
+    let x11 = c011 + f.x * (c111 - c011);
+    let y0 = x00 + f.y * (x10 - x00);
+    let y1 = x01 + f.y * (x11 - x01);
+    let phi = y0 + f.z * (y1 - y0);
+    let d00 = c100 - c000;
+    let d10 = c110 - c010;
+    let d01 = c101 - c001;
+    let d11 = c111 - c011;
+    let dy0 = d00 + f.y * (d10 - d00);
+    let dy1 = d01 + f.y * (d11 - d01);
+    let gx = dy0 + f.z * (dy1 - dy0);
+    let gy = (x10 - x00) + f.z * ((x11 - x01) - (x10 - x00));
+    let gz = y1 - y0;
+    (Vec3::new(gx, gy, gz) / cell).extend(phi)
+}
 
 /// Signed distances (negative inside) at the nodes of a regular grid, x fastest.
 #[derive(Clone, Debug, PartialEq)]
@@ -119,7 +159,7 @@ impl Sdf {
         if let Some(f) = &file {
             // A cache that cannot be written only costs a re-bake next time.
             let _ = std::fs::create_dir_all(f.parent().unwrap_or(Path::new(".")));
-            let _ = crate::output::write_atomic(f, &sdf.to_bytes());
+            let _ = crate::atomic_file::write_atomic(f, &sdf.to_bytes());
         }
         let r = report(&sdf, seconds, false);
         Ok((sdf, r))
@@ -162,7 +202,7 @@ impl Sdf {
     }
 
     /// Trilinear φ (w) and its gradient (xyz) at body-frame point `p`; outside the grid φ is
-    /// `crate::cpu::SDF_FAR` and the gradient zero.
+    /// `SDF_FAR` and the gradient zero.
     pub fn sample(&self, p: Vec3) -> Vec4 {
         sdf_sample(&self.values, self.dims, self.origin, self.cell, p)
     }

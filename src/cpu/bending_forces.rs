@@ -1,6 +1,6 @@
 //! CPU twin of `kernels/bending_forces.wgsl`.
 
-use crate::gpu::layout::{Hinge, SimParams};
+use crate::model::layout::{Hinge, SimParams};
 use glam::{Vec3, Vec4};
 
 /// Force on vertex `role` of hinge `h` (roles 0, 1: shared edge; 2, 3: opposite vertices).

@@ -1,6 +1,6 @@
 //! CPU twin of `kernels/hash_clear.wgsl`.
 
-use crate::gpu::layout::SimParams;
+use crate::model::layout::SimParams;
 
 /// Zeroes the per-bucket particle counts.
 pub fn hash_clear(params: &SimParams, counts: &mut [u32]) {

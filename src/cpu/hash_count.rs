@@ -1,6 +1,6 @@
 //! CPU twin of `kernels/hash_count.wgsl`, and the hash shared by the self-collision stages.
 
-use crate::gpu::layout::SimParams;
+use crate::model::layout::SimParams;
 use glam::{IVec3, Vec3, Vec4};
 
 /// The hash cell containing `x`.

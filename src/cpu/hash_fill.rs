@@ -2,7 +2,7 @@
 //! order within a bucket depends on its atomics).
 
 use super::hash_count::{hash_bucket, hash_cell_of};
-use crate::gpu::layout::SimParams;
+use crate::model::layout::SimParams;
 use glam::Vec4;
 
 /// Places each particle index in its bucket's range of `sorted`.

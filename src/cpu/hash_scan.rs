@@ -1,6 +1,6 @@
 //! CPU twin of `kernels/hash_scan.wgsl`.
 
-use crate::gpu::layout::SimParams;
+use crate::model::layout::SimParams;
 
 /// Exclusive prefix sum of the counts into `starts` (one more entry: the total) and `cursor`.
 pub fn hash_scan(params: &SimParams, counts: &[u32], starts: &mut [u32], cursor: &mut [u32]) {

@@ -1,6 +1,6 @@
 //! CPU twin of `kernels/integrate.wgsl`.
 
-use crate::gpu::layout::{SimParams, INTEGRATOR_EXPLICIT};
+use crate::model::layout::{SimParams, INTEGRATOR_EXPLICIT};
 use glam::Vec4;
 
 /// Advances every free particle by one Euler step and clears the force accumulator. (The kernel

@@ -14,9 +14,7 @@ mod spring_forces;
 mod wind_forces;
 
 pub use bending_forces::{bending_forces, hinge_force};
-pub use collide_body::{
-    collide_body, collide_edge, collide_edges, collide_particle, sdf_sample, SDF_FAR,
-};
+pub use collide_body::{collide_body, collide_edge, collide_edges, collide_particle};
 pub use hash_clear::hash_clear;
 pub use hash_count::{hash_bucket, hash_cell_of, hash_count};
 pub use hash_fill::hash_fill;
@@ -28,7 +26,7 @@ pub use spring_forces::spring_forces;
 pub use wind_forces::wind_forces;
 
 use crate::error::Error;
-use crate::gpu::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams};
+use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams};
 use crate::model::{ClothModel, Csr};
 use crate::plan::{Pass, PassPlan};
 use crate::solver::{AdapterReport, ParticleState, Solver};

@@ -1,6 +1,6 @@
 //! CPU twin of `kernels/seam_forces.wgsl`.
 
-use crate::gpu::layout::{Seam, SimParams, SubstepParams};
+use crate::model::layout::{Seam, SimParams, SubstepParams};
 use glam::{Vec3, Vec4};
 
 /// The force on the seam vertex; the partner segment's ends get −(1 − w) and −w of it. The

@@ -1,7 +1,7 @@
 //! CPU twin of `kernels/self_collide.wgsl`.
 
 use super::hash_count::{hash_bucket, hash_cell_of};
-use crate::gpu::layout::{SimParams, SpringRef};
+use crate::model::layout::{SimParams, SpringRef};
 use glam::{IVec3, Vec3, Vec4};
 
 fn is_neighbour(i: usize, j: u32, spring_offsets: &[u32], springs: &[SpringRef]) -> bool {

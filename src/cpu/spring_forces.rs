@@ -1,6 +1,6 @@
 //! CPU twin of `kernels/spring_forces.wgsl`.
 
-use crate::gpu::layout::{SimParams, SpringRef};
+use crate::model::layout::{SimParams, SpringRef};
 use glam::Vec4;
 
 /// Adds each particle's spring forces to `force`, gathered over its CSR springs.

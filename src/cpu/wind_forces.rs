@@ -1,6 +1,6 @@
 //! CPU twin of `kernels/wind_forces.wgsl`.
 
-use crate::gpu::layout::{SimParams, SubstepParams};
+use crate::model::layout::{SimParams, SubstepParams};
 use glam::{Vec3, Vec4};
 
 /// Adds each particle's share of wind drag on its incident triangles to `force`.

@@ -1,10 +1,13 @@
-//! The wgpu path: shared layouts, adapter choice, kernel composition and the solver.
+//! The wgpu path: adapter choice, kernel composition and the solver.
 
 mod context;
+mod encode;
 pub mod kernels;
-pub mod layout;
+mod pipelines;
+mod readback;
 mod solver;
 mod texels;
 
 pub use context::{AdapterChoice, GpuContext};
+pub use readback::HashTables;
 pub use solver::GpuSolver;

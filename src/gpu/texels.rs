@@ -3,8 +3,8 @@
 //! textures rather than storage buffers).
 
 use super::context::GpuContext;
-use super::layout::TEXELS_PER_ROW;
 use crate::error::Error;
+use crate::model::layout::TEXELS_PER_ROW;
 
 /// A texture holding `len` elements of one texel each, in rows of `TEXELS_PER_ROW`.
 pub struct TexelArray {

@@ -1,19 +1,18 @@
-//! The scene's `[body]` table: which body, its SDF, its collision response and its motion.
+//! The `[body]` table: which body, its SDF, its collision response and its motion.
 
-use super::motion::{Keyframe, Motion};
-use super::sdf::{grid_bytes, grid_for, Sdf};
-use super::{shapes, Body, Collider, Strategy};
+use crate::body::motion::{Keyframe, Motion};
+use crate::body::Strategy;
+use crate::check::Checker;
 use crate::error::InputError;
-use crate::scene::Checker;
 use glam::{EulerRot, Quat, Vec3};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-pub(crate) struct RawBody {
+pub(super) struct RawBody {
     path: Option<String>,
-    #[serde(default = "crate::scene::default_units")]
+    #[serde(default = "crate::check::default_units")]
     units: String,
     #[serde(default)]
     offset_m: [f64; 3],
@@ -159,11 +158,8 @@ pub struct BodySettings {
     pub motion: Motion,
 }
 
-/// Sphere/capsule resolution: rings of latitude, fine enough that the facets sit within
-/// 0.5% of the radius (cos(π/48) ≈ 0.9979).
-const SHAPE_RINGS: u32 = 48;
-
-pub(crate) fn parse(c: &Checker, base: &Path, b: &RawBody) -> Result<BodySettings, InputError> {
+/// Validates `[body]`.
+pub(super) fn parse(c: &Checker, base: &Path, b: &RawBody) -> Result<BodySettings, InputError> {
     let t = "body";
     let source = match (&b.path, b.shape.as_deref()) {
         (Some(p), None) => BodySource::Mesh {
@@ -329,103 +325,4 @@ pub(crate) fn parse(c: &Checker, base: &Path, b: &RawBody) -> Result<BodySetting
         edge_contacts: b.edge_contacts,
         motion,
     })
-}
-
-impl BodySettings {
-    /// The body's triangles, checked.
-    pub(crate) fn body(&self, c: &Checker) -> Result<Body, InputError> {
-        let mesh = match &self.source {
-            BodySource::Mesh {
-                path,
-                scale,
-                offset,
-            } => return Body::load(path, *scale, *offset, "body.path"),
-            BodySource::Sphere { center, radius } => shapes::sphere(*center, *radius, SHAPE_RINGS),
-            BodySource::Cuboid { center, half } => shapes::cuboid(*center, *half),
-            BodySource::Mannequin { feet } => shapes::mannequin(*feet),
-            BodySource::Capsule {
-                center,
-                radius,
-                half_height,
-            } => shapes::capsule(*center, *radius, *half_height, SHAPE_RINGS),
-        };
-        Body::from_mesh(mesh).map_err(|e| {
-            c.err(
-                "body",
-                "shape",
-                format!("generated an invalid mesh: {e}"),
-                "report this as a bug",
-            )
-        })
-    }
-
-    /// Loads the body, bakes (or reads) its SDF under the memory cap, and builds the collider.
-    pub(crate) fn collider(&self, c: &Checker) -> Result<Collider, InputError> {
-        let body = self.body(c)?;
-        let (_, dims) = grid_for(&body, self.sdf_resolution, self.sdf_margin);
-        let bytes = grid_bytes(dims);
-        if bytes > self.sdf_max_bytes {
-            // Memory falls with the cube of the spacing.
-            let suggested =
-                self.sdf_resolution * (bytes as f32 / self.sdf_max_bytes as f32).cbrt() * 1.05;
-            return Err(c.err(
-                "body",
-                "sdf_resolution_m",
-                format!(
-                    "an SDF at {} m needs {dims:?} nodes = {:.0} MiB, above sdf_max_mb = {:.0}",
-                    self.sdf_resolution,
-                    bytes as f64 / 1048576.0,
-                    self.sdf_max_bytes as f64 / 1048576.0
-                ),
-                format!("use sdf_resolution_m = {suggested:.4} or coarser, or raise sdf_max_mb"),
-            ));
-        }
-        let cache = self.sdf_cache.then(cache_dir).flatten();
-        let (sdf, bake) = Sdf::bake_cached(
-            &body,
-            self.sdf_resolution,
-            self.sdf_margin,
-            cache.as_deref(),
-        )
-        .map_err(|e| {
-            c.err(
-                "body",
-                "",
-                format!("cannot bake the SDF: {e}"),
-                "check the body mesh",
-            )
-        })?;
-        let exact = super::exact::ExactBody::new(&body.mesh).map_err(|e| {
-            c.err(
-                "body",
-                "",
-                format!("cannot build the BVH: {e}"),
-                "check the body mesh",
-            )
-        })?;
-        let bvh = self
-            .strategy
-            .volume()
-            .map(|kind| super::bvh::BodyBvh::new(&body.mesh, kind));
-        Ok(Collider {
-            bvh,
-            edges: self
-                .edge_contacts
-                .then(|| super::edges::BodyEdges::new(&body.mesh)),
-            body,
-            sdf,
-            exact,
-            motion: self.motion.clone(),
-            strategy: self.strategy,
-            bake,
-        })
-    }
-}
-
-/// `$XDG_CACHE_HOME/drapekit`, else `$HOME/.cache/drapekit`.
-fn cache_dir() -> Option<PathBuf> {
-    let base = std::env::var_os("XDG_CACHE_HOME")
-        .map(PathBuf::from)
-        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))?;
-    Some(base.join("drapekit"))
 }

@@ -1,22 +1,17 @@
 //! The cloth model: particles, springs, hinges and triangles, in SI units, plus the CSR
-//! incidence lists that let each particle gather its forces without atomics.
+//! incidence lists that let each particle gather its forces without atomics, and the
+//! parameter structs both backends share (`layout`, mirrored by `kernels/common.wgsl`).
 
-use crate::gpu::layout::{Hinge, Seam, SpringRef, INTEGRATOR_EXPLICIT};
+mod build;
+mod collider;
+pub mod layout;
+
+pub use build::BuiltCloth;
+
 use crate::mesh::TriMesh;
+use crate::scene::Fabric;
 use glam::{Vec3, Vec4};
-
-/// Fabric parameters in SI units.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Fabric {
-    /// Areal density in kg/m².
-    pub density: f32,
-    /// Membrane stretch stiffness in N/m (force per unit width per unit strain).
-    pub stretch_stiffness: f32,
-    /// Bending rigidity in N·m; `None` disables bending.
-    pub bending_stiffness: Option<f32>,
-    /// Spring damping as a fraction of each spring's critical damping.
-    pub damping_ratio: f32,
-}
+use layout::{Hinge, Seam, SpringRef, INTEGRATOR_EXPLICIT};
 
 /// A stretch spring between two particles.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -123,9 +123,7 @@ pub struct Seam {
 }
 
 /// Integrator codes shared with `integrate.wgsl`.
-pub const INTEGRATOR_EXPLICIT: u32 = 0;
-/// Semi-implicit (symplectic) Euler.
-pub const INTEGRATOR_SYMPLECTIC: u32 = 1;
+pub use crate::scene::{INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC};
 /// Width in texels of every data texture, as `TEXELS_PER_ROW` in common.wgsl.
 pub const TEXELS_PER_ROW: u32 = 2048;
 /// Threads per workgroup, as `WORKGROUP_SIZE` in common.wgsl.

@@ -1,0 +1,159 @@
+//! Input checking shared by every file format: locating a key's line in a TOML file, and
+//! validating numbers and units with errors that say where and what to do.
+
+use crate::error::InputError;
+use glam::Vec3;
+use std::path::Path;
+
+/// The default length unit of mesh files (`units` keys).
+pub(crate) fn default_units() -> String {
+    "m".into()
+}
+
+/// back to the table's header line.
+fn key_line(src: &str, table: &str, key: &str) -> Option<usize> {
+    let (name, index) = match table.split_once('[') {
+        Some((n, rest)) => (n, rest.trim_end_matches(']').parse::<usize>().unwrap_or(0)),
+        None => (table, 0),
+    };
+    let mut current = String::new();
+    let mut current_index = 0usize;
+    let mut array_counts = std::collections::HashMap::<String, usize>::new();
+    let mut header_line = None;
+    for (n, line) in src.lines().enumerate() {
+        let t = line.trim();
+        if let Some(h) = t.strip_prefix("[[") {
+            current = h.split("]]").next().unwrap_or("").trim().to_string();
+            let count = array_counts.entry(current.clone()).or_insert(0);
+            current_index = *count;
+            *count += 1;
+        } else if let Some(h) = t.strip_prefix('[') {
+            current = h.split(']').next().unwrap_or("").trim().to_string();
+            current_index = 0;
+        } else if current == name && current_index == index {
+            if let Some(rest) = t.strip_prefix(key) {
+                if rest.trim_start().starts_with('=') {
+                    return Some(n + 1);
+                }
+            }
+            continue;
+        } else {
+            continue;
+        }
+        if current == name && current_index == index {
+            header_line = Some(n + 1);
+        }
+    }
+    header_line
+}
+
+/// Validation context: the file and its text, for locations.
+pub struct Checker<'a> {
+    /// The file being checked.
+    pub path: &'a Path,
+    /// Its text, to find the line of a key.
+    pub src: &'a str,
+}
+
+impl Checker<'_> {
+    /// An error about `table.key`, located at the key's line (or its table's header).
+    pub fn err(
+        &self,
+        table: &str,
+        key: &str,
+        problem: impl Into<String>,
+        fix: impl Into<String>,
+    ) -> InputError {
+        let location = if key.is_empty() {
+            table.to_string()
+        } else {
+            format!("{table}.{key}")
+        };
+        InputError::new(self.path, location, problem, fix).at_line(key_line(self.src, table, key))
+    }
+
+    /// Metres per file unit for a unit name (`m`, `dm`, `cm`, `mm`).
+    pub fn units(&self, table: &str, key: &str, name: &str) -> Result<f32, InputError> {
+        match name {
+            "m" => Ok(1.0),
+            "dm" => Ok(0.1),
+            "cm" => Ok(0.01),
+            "mm" => Ok(0.001),
+            other => Err(self.err(
+                table,
+                key,
+                format!("unknown unit {other:?}"),
+                "use one of \"m\", \"dm\", \"cm\", \"mm\"",
+            )),
+        }
+    }
+
+    /// `v` as f32, refusing NaN and infinities.
+    pub fn finite(&self, table: &str, key: &str, v: f64) -> Result<f32, InputError> {
+        if !v.is_finite() {
+            return Err(self.err(
+                table,
+                key,
+                format!("{v} is not a finite number"),
+                "write a finite decimal number",
+            ));
+        }
+        Ok(v as f32)
+    }
+
+    /// A finite `v` > 0 in `unit`.
+    pub fn positive(&self, table: &str, key: &str, v: f64, unit: &str) -> Result<f32, InputError> {
+        let x = self.finite(table, key, v)?;
+        if v <= 0.0 {
+            return Err(self.err(
+                table,
+                key,
+                format!("must be greater than zero, got {v}"),
+                format!("give a positive value in {unit}"),
+            ));
+        }
+        Ok(x)
+    }
+
+    /// A finite `v` ≥ 0 in `unit`.
+    pub fn non_negative(
+        &self,
+        table: &str,
+        key: &str,
+        v: f64,
+        unit: &str,
+    ) -> Result<f32, InputError> {
+        let x = self.finite(table, key, v)?;
+        if v < 0.0 {
+            return Err(self.err(
+                table,
+                key,
+                format!("must not be negative, got {v}"),
+                format!("give zero or a positive value in {unit}"),
+            ));
+        }
+        Ok(x)
+    }
+
+    /// Three finite components.
+    pub fn vec3(&self, table: &str, key: &str, v: [f64; 3]) -> Result<Vec3, InputError> {
+        let mut out = [0.0f32; 3];
+        for (o, x) in out.iter_mut().zip(v) {
+            *o = self.finite(table, key, x)?;
+        }
+        Ok(Vec3::from(out))
+    }
+
+    /// A whole number from `min` to `u32::MAX`.
+    pub fn count(&self, table: &str, key: &str, v: i64, min: i64) -> Result<u32, InputError> {
+        if v < min || v > u32::MAX as i64 {
+            return Err(self.err(
+                table,
+                key,
+                format!("must be an integer of at least {min}, got {v}"),
+                format!("give a whole number ≥ {min}"),
+            ));
+        }
+        Ok(v as u32)
+    }
+}

@@ -1,0 +1,164 @@
+//! Stage pipelines: bind group layouts, bind groups and compute pipelines, built from one
+//! list of bindings per stage so that layout and group cannot disagree.
+
+use super::context::GpuContext;
+use super::kernels::{compose, ForceInput};
+use super::texels::TexelArray;
+use crate::model::layout::SubstepParams;
+use crate::plan::Pass;
+use std::num::NonZeroU64;
+
+/// One binding of a stage; the layout entry and the bind group entry come from the same value.
+#[derive(Clone, Copy)]
+pub(super) enum Binding<'a> {
+    Uniform(&'a wgpu::Buffer),
+    /// One `SubstepParams` at a dynamic offset.
+    SubstepUniform(&'a wgpu::Buffer),
+    /// Read with textureLoad.
+    Read(&'a TexelArray),
+    /// Written with textureStore.
+    Write(&'a TexelArray),
+    /// A storage buffer (u32 arrays and atomics of the spatial hash).
+    Storage(&'a wgpu::Buffer, bool),
+}
+
+pub(super) struct Stage {
+    pub(super) pass: Pass,
+    pub(super) pipeline: wgpu::ComputePipeline,
+    /// Indexed by which state texture pair is current.
+    pub(super) bind_groups: [wgpu::BindGroup; 2],
+    /// Group 1: the force texture of the previous force stage.
+    pub(super) force_in: Option<wgpu::BindGroup>,
+    /// The force texture this stage writes.
+    pub(super) force_out: Option<usize>,
+    pub(super) uses_substep: bool,
+    /// Workgroups in x and y.
+    pub(super) dispatch: (u32, u32),
+}
+
+/// The layout entry of one binding.
+fn layout_entry(binding: u32, b: &Binding) -> wgpu::BindGroupLayoutEntry {
+    let substep_size = NonZeroU64::new(std::mem::size_of::<SubstepParams>() as u64);
+    let ty = match b {
+        Binding::Uniform(_) | Binding::SubstepUniform(_) => {
+            let dynamic = matches!(b, Binding::SubstepUniform(_));
+            wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: dynamic,
+                min_binding_size: if dynamic { substep_size } else { None },
+            }
+        }
+        Binding::Read(t) => wgpu::BindingType::Texture {
+            sample_type: t.sample_type(),
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        Binding::Write(t) => wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::WriteOnly,
+            format: t.format,
+            view_dimension: wgpu::TextureViewDimension::D2,
+        },
+        Binding::Storage(_, read_only) => wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage {
+                read_only: *read_only,
+            },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+    };
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty,
+        count: None,
+    }
+}
+
+/// The bind group entry of one binding.
+fn group_entry<'a>(binding: u32, b: &Binding<'a>) -> wgpu::BindGroupEntry<'a> {
+    let resource = match *b {
+        Binding::Uniform(buffer) => buffer.as_entire_binding(),
+        // The dynamic binding covers one entry; the offset selects which.
+        Binding::SubstepUniform(buffer) => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer,
+            offset: 0,
+            size: NonZeroU64::new(std::mem::size_of::<SubstepParams>() as u64),
+        }),
+        Binding::Read(t) | Binding::Write(t) => wgpu::BindingResource::TextureView(&t.view),
+        Binding::Storage(buffer, _) => buffer.as_entire_binding(),
+    };
+    wgpu::BindGroupEntry { binding, resource }
+}
+
+/// A layout and one bind group per binding list (all lists have the same shape).
+fn bind_groups<const K: usize>(
+    device: &wgpu::Device,
+    label: &str,
+    lists: [&[Binding]; K],
+) -> (wgpu::BindGroupLayout, [wgpu::BindGroup; K]) {
+    let entries: Vec<_> = (lists[0].iter().enumerate())
+        .map(|(i, b)| layout_entry(i as u32, b))
+        .collect();
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &entries,
+    });
+    let groups = lists.map(|list| {
+        let entries: Vec<_> = (list.iter().enumerate())
+            .map(|(i, b)| group_entry(i as u32, b))
+            .collect();
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(label),
+            layout: &layout,
+            entries: &entries,
+        })
+    });
+    (layout, groups)
+}
+
+/// One stage's pipeline and bind groups (one per state parity).
+pub(super) fn build_stage(
+    ctx: &GpuContext,
+    pass: Pass,
+    input: ForceInput,
+    state_bindings: [&[Binding]; 2],
+    force_in: Option<&[Binding]>,
+    force_out: Option<usize>,
+    dispatch: (u32, u32),
+) -> Stage {
+    let device = &ctx.device;
+    let (layout0, groups) = bind_groups(device, pass.name(), state_bindings);
+    let force_in = force_in.map(|b| bind_groups(device, "force_in", [b]));
+    let mut layouts = vec![Some(&layout0)];
+    if let Some((layout1, _)) = &force_in {
+        layouts.push(Some(layout1));
+    }
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(pass.name()),
+        bind_group_layouts: &layouts,
+        immediate_size: 0,
+    });
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(pass.name()),
+        source: wgpu::ShaderSource::Wgsl(compose(pass, input).into()),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(pass.name()),
+        layout: Some(&layout),
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    Stage {
+        pass,
+        pipeline,
+        bind_groups: groups,
+        force_in: force_in.map(|(_, [g])| g),
+        force_out,
+        dispatch,
+        uses_substep: state_bindings[0]
+            .iter()
+            .any(|b| matches!(b, Binding::SubstepUniform(_))),
+    }
+}

@@ -1,0 +1,111 @@
+//! Building the collision body from the scene's `[body]` settings: mesh, SDF (baked or cached,
+//! under the memory cap), exact BVH and contact strategy.
+
+use crate::body::bvh::BodyBvh;
+use crate::body::edges::BodyEdges;
+use crate::body::exact::ExactBody;
+use crate::body::sdf::{grid_bytes, grid_for, Sdf};
+use crate::body::{shapes, Body, Collider};
+use crate::check::Checker;
+use crate::error::InputError;
+use crate::scene::{BodySettings, BodySource};
+use std::path::PathBuf;
+
+/// Sphere/capsule resolution: rings of latitude, fine enough that the facets sit within
+/// 0.5% of the radius (cos(π/48) ≈ 0.9979).
+const SHAPE_RINGS: u32 = 48;
+
+/// The body's triangles, checked.
+fn build_body(settings: &BodySettings, c: &Checker) -> Result<Body, InputError> {
+    let mesh = match &settings.source {
+        BodySource::Mesh {
+            path,
+            scale,
+            offset,
+        } => return Body::load(path, *scale, *offset, "body.path"),
+        BodySource::Sphere { center, radius } => shapes::sphere(*center, *radius, SHAPE_RINGS),
+        BodySource::Cuboid { center, half } => shapes::cuboid(*center, *half),
+        BodySource::Mannequin { feet } => shapes::mannequin(*feet),
+        BodySource::Capsule {
+            center,
+            radius,
+            half_height,
+        } => shapes::capsule(*center, *radius, *half_height, SHAPE_RINGS),
+    };
+    Body::from_mesh(mesh).map_err(|e| {
+        c.err(
+            "body",
+            "shape",
+            format!("generated an invalid mesh: {e}"),
+            "report this as a bug",
+        )
+    })
+}
+
+/// Loads the body, bakes (or reads) its SDF under the memory cap, and builds the collider.
+pub(crate) fn build_collider(settings: &BodySettings, c: &Checker) -> Result<Collider, InputError> {
+    let body = build_body(settings, c)?;
+    let (_, dims) = grid_for(&body, settings.sdf_resolution, settings.sdf_margin);
+    let bytes = grid_bytes(dims);
+    if bytes > settings.sdf_max_bytes {
+        // Memory falls with the cube of the spacing.
+        let suggested =
+            settings.sdf_resolution * (bytes as f32 / settings.sdf_max_bytes as f32).cbrt() * 1.05;
+        return Err(c.err(
+            "body",
+            "sdf_resolution_m",
+            format!(
+                "an SDF at {} m needs {dims:?} nodes = {:.0} MiB, above sdf_max_mb = {:.0}",
+                settings.sdf_resolution,
+                bytes as f64 / 1048576.0,
+                settings.sdf_max_bytes as f64 / 1048576.0
+            ),
+            format!("use sdf_resolution_m = {suggested:.4} or coarser, or raise sdf_max_mb"),
+        ));
+    }
+    let cache = settings.sdf_cache.then(cache_dir).flatten();
+    let (sdf, bake) = Sdf::bake_cached(
+        &body,
+        settings.sdf_resolution,
+        settings.sdf_margin,
+        cache.as_deref(),
+    )
+    .map_err(|e| {
+        c.err(
+            "body",
+            "",
+            format!("cannot bake the SDF: {e}"),
+            "check the body mesh",
+        )
+    })?;
+    let exact = ExactBody::new(&body.mesh).map_err(|e| {
+        c.err(
+            "body",
+            "",
+            format!("cannot build the BVH: {e}"),
+            "check the body mesh",
+        )
+    })?;
+    let bvh = settings
+        .strategy
+        .volume()
+        .map(|kind| BodyBvh::new(&body.mesh, kind));
+    Ok(Collider {
+        bvh,
+        edges: settings.edge_contacts.then(|| BodyEdges::new(&body.mesh)),
+        body,
+        sdf,
+        exact,
+        motion: settings.motion.clone(),
+        strategy: settings.strategy,
+        bake,
+    })
+}
+
+/// `$XDG_CACHE_HOME/drapekit`, else `$HOME/.cache/drapekit`.
+fn cache_dir() -> Option<PathBuf> {
+    let base = std::env::var_os("XDG_CACHE_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))?;
+    Some(base.join("drapekit"))
+}

@@ -1,0 +1,158 @@
+//! Scene files (TOML): parsing and validation with precise errors, into plain SI data. A scene
+//! describes; building the cloth model from it is `model`'s job. One file per section; every
+//! key, its unit and its default are documented in README.md ("Scene format").
+
+mod body;
+mod cloth;
+mod fabric;
+mod pins;
+mod raw;
+mod self_collision;
+mod solver;
+mod world;
+
+pub use body::{BodySettings, BodySource};
+pub use cloth::ClothSource;
+pub use fabric::Fabric;
+pub use pins::{Corner, GridEdge, PinSelection};
+pub use self_collision::SelfCollision;
+pub use solver::{OutputSettings, SolverSettings, INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC};
+pub use world::Wind;
+
+use crate::check::Checker;
+use crate::error::InputError;
+use glam::Vec3;
+use raw::RawScene;
+use std::path::{Path, PathBuf};
+
+/// What a scene asks for beyond its mesh; the pass plan gives each effect its passes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Effects {
+    /// Bending stiffness is set.
+    pub bending: bool,
+    /// A wind section is present.
+    pub wind: bool,
+    /// A collision body is present.
+    pub body: bool,
+    /// Self-collision is on.
+    pub self_collision: bool,
+}
+
+/// A validated scene in SI units.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The scene file.
+    pub path: PathBuf,
+    /// The scene file's text, to locate errors found after parsing.
+    pub source: String,
+    /// The cloth geometry.
+    pub cloth: ClothSource,
+    /// The fabric.
+    pub fabric: Fabric,
+    /// Pin selections, in file order.
+    pub pins: Vec<PinSelection>,
+    /// Gravity in m/s².
+    pub gravity: Vec3,
+    /// Gravity is off before this time (a zero-gravity sewing phase), in s.
+    pub gravity_start: f32,
+    /// Air damping in 1/s.
+    pub air_damping: f32,
+    /// Wind, if any.
+    pub wind: Option<Wind>,
+    /// Self-collision, if on.
+    pub self_collision: Option<SelfCollision>,
+    /// The collision body, if any.
+    pub body: Option<BodySettings>,
+    /// Solver settings.
+    pub solver: SolverSettings,
+    /// Output settings.
+    pub output: OutputSettings,
+}
+
+impl Scene {
+    /// Reads and validates a scene file.
+    pub fn load(path: &Path) -> Result<Scene, InputError> {
+        let src = std::fs::read_to_string(path).map_err(|e| {
+            InputError::new(
+                path,
+                "",
+                format!("cannot read the scene file: {e}"),
+                "check the path",
+            )
+        })?;
+        Scene::parse(&src, path)
+    }
+
+    /// Parses and validates scene text; `path` locates errors and relative mesh paths.
+    pub fn parse(src: &str, path: &Path) -> Result<Scene, InputError> {
+        let raw: RawScene = toml::from_str(src).map_err(|e| {
+            let line = e
+                .span()
+                .map(|s| src[..s.start.min(src.len())].matches('\n').count() + 1);
+            InputError::new(
+                path,
+                "",
+                e.message().trim().to_string(),
+                "see the scene format in README.md: every key, its unit and default",
+            )
+            .at_line(line)
+        })?;
+        let c = Checker { path, src };
+        let base = path.parent().unwrap_or(Path::new("."));
+        let stretch = raw.fabric.stretch_stiffness_n_m;
+        let cloth = cloth::parse(&c, base, raw.cloth, stretch)?;
+        let fabric = fabric::parse(&c, &raw.fabric)?;
+        let pins = pins::parse(&c, &raw.pins, &cloth)?;
+        let world = world::parse_world(&c, &raw.world)?;
+        let wind = world::parse_wind(&c, &raw.wind)?;
+        let solver = solver::parse_solver(&c, &raw.solver)?;
+        let output = solver::parse_output(&c, path, &raw.output)?;
+        Ok(Scene {
+            path: path.to_path_buf(),
+            source: src.to_string(),
+            cloth,
+            fabric,
+            pins,
+            gravity: world.gravity,
+            gravity_start: world.gravity_start,
+            air_damping: world.air_damping,
+            wind,
+            self_collision: self_collision::parse(&c, &raw.self_collision)?,
+            body: match &raw.body {
+                Some(b) => Some(body::parse(&c, base, b)?),
+                None => None,
+            },
+            solver,
+            output,
+        })
+    }
+
+    /// The validation context of this scene's file, to report errors found after parsing.
+    pub fn checker(&self) -> Checker<'_> {
+        Checker {
+            path: &self.path,
+            src: &self.source,
+        }
+    }
+
+    /// An error about `table.key` of this scene, located at its line.
+    pub fn error(
+        &self,
+        table: &str,
+        key: &str,
+        problem: impl Into<String>,
+        fix: impl Into<String>,
+    ) -> InputError {
+        self.checker().err(table, key, problem, fix)
+    }
+
+    /// The effects this scene asks for, for the pass plan.
+    pub fn effects(&self) -> Effects {
+        Effects {
+            bending: self.fabric.bending_stiffness.is_some(),
+            wind: self.wind.is_some(),
+            body: self.body.is_some(),
+            self_collision: self.self_collision.is_some(),
+        }
+    }
+}

@@ -1,0 +1,239 @@
+//! The scene file as TOML gives it: serde structs with defaults, before validation.
+
+use serde::Deserialize;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawScene {
+    pub(super) cloth: RawCloth,
+    pub(super) fabric: RawFabric,
+    #[serde(default)]
+    pub(super) pins: Vec<RawPin>,
+    #[serde(default)]
+    pub(super) world: RawWorld,
+    pub(super) wind: Option<RawWind>,
+    pub(super) body: Option<super::body::RawBody>,
+    pub(super) self_collision: Option<RawSelfCollision>,
+    pub(super) solver: RawSolver,
+    #[serde(default)]
+    pub(super) output: RawOutput,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawSelfCollision {
+    pub(super) thickness_m: Option<f64>,
+    pub(super) hash_buckets: Option<i64>,
+    #[serde(default = "default_cpu_reference")]
+    pub(super) cpu_method: String,
+}
+
+fn default_cpu_reference() -> String {
+    "particles".into()
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawCloth {
+    pub(super) grid: Option<RawGrid>,
+    pub(super) mesh: Option<RawMesh>,
+    pub(super) pattern: Option<RawPattern>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawPattern {
+    pub(super) path: String,
+    #[serde(default = "default_particle_distance")]
+    pub(super) particle_distance_m: f64,
+    pub(super) seam_stiffness_n_m: Option<f64>,
+    pub(super) seam_sewing_time_s: Option<f64>,
+    #[serde(default = "default_closed_gap")]
+    pub(super) seam_closed_gap_m: f64,
+    #[serde(default)]
+    pub(super) placement: std::collections::BTreeMap<String, RawPlacement>,
+    #[serde(default)]
+    pub(super) seams: Vec<RawSeam>,
+    #[serde(default)]
+    pub(super) attach_labels: Vec<String>,
+    #[serde(default)]
+    pub(super) attach_frames: i64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawSeam {
+    pub(super) stitch: i64,
+    #[serde(default)]
+    pub(super) fold_deg: f64,
+}
+
+fn default_particle_distance() -> f64 {
+    0.01
+}
+
+fn default_closed_gap() -> f64 {
+    0.001
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawPlacement {
+    pub(super) translation: [f64; 3],
+    #[serde(default)]
+    pub(super) rotation_deg: [f64; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawGrid {
+    pub(super) width_m: f64,
+    pub(super) height_m: f64,
+    pub(super) columns: u32,
+    pub(super) rows: u32,
+    #[serde(default)]
+    pub(super) center_m: [f64; 3],
+    #[serde(default = "default_plane")]
+    pub(super) plane: String,
+}
+
+fn default_plane() -> String {
+    "xy".into()
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawMesh {
+    pub(super) path: String,
+    #[serde(default = "crate::check::default_units")]
+    pub(super) units: String,
+    #[serde(default)]
+    pub(super) offset_m: [f64; 3],
+}
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawFabric {
+    pub(super) density_kg_m2: f64,
+    pub(super) stretch_stiffness_n_m: f64,
+    pub(super) bending_stiffness_n_m: Option<f64>,
+    #[serde(default = "default_damping_ratio")]
+    pub(super) damping_ratio: f64,
+}
+
+fn default_damping_ratio() -> f64 {
+    0.05
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawPin {
+    pub(super) corners: Option<Vec<String>>,
+    pub(super) edge: Option<String>,
+    pub(super) indices: Option<Vec<i64>>,
+    pub(super) box_min_m: Option<[f64; 3]>,
+    pub(super) box_max_m: Option<[f64; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawWorld {
+    #[serde(default = "default_gravity")]
+    pub(super) gravity_m_s2: [f64; 3],
+    #[serde(default)]
+    pub(super) air_damping_per_s: f64,
+    #[serde(default)]
+    pub(super) gravity_start_s: f64,
+}
+
+impl Default for RawWorld {
+    fn default() -> Self {
+        RawWorld {
+            gravity_m_s2: default_gravity(),
+            air_damping_per_s: 0.0,
+            gravity_start_s: 0.0,
+        }
+    }
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, -9.81, 0.0]
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawWind {
+    pub(super) velocity_m_s: [f64; 3],
+    #[serde(default = "default_air_density")]
+    pub(super) air_density_kg_m3: f64,
+    #[serde(default = "default_drag")]
+    pub(super) drag_coefficient: f64,
+    #[serde(default)]
+    pub(super) gust_amplitude: f64,
+    #[serde(default)]
+    pub(super) gust_frequency_hz: f64,
+}
+
+fn default_air_density() -> f64 {
+    1.225
+}
+fn default_drag() -> f64 {
+    1.0
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+pub(super) enum RawSubsteps {
+    Count(i64),
+    Word(String),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawSolver {
+    #[serde(default = "default_fps")]
+    pub(super) fps: f64,
+    pub(super) frames: i64,
+    pub(super) substeps: Option<RawSubsteps>,
+    #[serde(default = "default_integrator")]
+    pub(super) integrator: String,
+    pub(super) settle_ke_per_particle_j: Option<f64>,
+    #[serde(default = "default_max_substeps")]
+    pub(super) max_substeps_per_frame: i64,
+}
+
+fn default_fps() -> f64 {
+    24.0
+}
+fn default_integrator() -> String {
+    "symplectic".into()
+}
+fn default_max_substeps() -> i64 {
+    20_000
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawOutput {
+    pub(super) dir: Option<String>,
+    #[serde(default = "default_true")]
+    pub(super) obj: bool,
+    #[serde(default = "default_every")]
+    pub(super) every: i64,
+}
+
+impl Default for RawOutput {
+    fn default() -> Self {
+        RawOutput {
+            dir: None,
+            obj: true,
+            every: 1,
+        }
+    }
+}
+
+fn default_true() -> bool {
+    true
+}
+fn default_every() -> i64 {
+    1
+}

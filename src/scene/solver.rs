@@ -1,0 +1,102 @@
+//! The `[solver]` and `[output]` tables: frame rate, steps, integrator, and what is written.
+
+use super::raw::{RawOutput, RawSolver, RawSubsteps};
+use crate::check::Checker;
+use crate::error::InputError;
+use std::path::{Path, PathBuf};
+
+/// Forward (explicit) Euler. The integrator codes are mirrored in `kernels/common.wgsl`.
+pub const INTEGRATOR_EXPLICIT: u32 = 0;
+/// Semi-implicit (symplectic) Euler.
+pub const INTEGRATOR_SYMPLECTIC: u32 = 1;
+
+/// Solver settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolverSettings {
+    /// Output frames per simulated second.
+    pub fps: f32,
+    /// Number of output frames.
+    pub frames: u32,
+    /// Substeps per frame, or `None` for automatic from the stability bound.
+    pub substeps: Option<u32>,
+    /// `INTEGRATOR_EXPLICIT` or `INTEGRATOR_SYMPLECTIC`.
+    pub integrator: u32,
+    /// Stop once kinetic energy per free particle falls below this (J).
+    pub settle_ke_per_particle: Option<f32>,
+    /// The most substeps per frame `auto` may choose before the scene is refused.
+    pub max_substeps_per_frame: u32,
+}
+
+/// Output settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputSettings {
+    /// Output folder.
+    pub dir: PathBuf,
+    /// Write one OBJ per output frame.
+    pub obj: bool,
+    /// Write every n-th frame.
+    pub every: u32,
+}
+
+/// Validates `[solver]`.
+pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings, InputError> {
+    let substeps = match &s.substeps {
+        None => None,
+        Some(RawSubsteps::Word(w)) if w == "auto" => None,
+        Some(RawSubsteps::Word(w)) => {
+            return Err(c.err(
+                "solver",
+                "substeps",
+                format!("{w:?} is not a substep count"),
+                "write \"auto\" or a whole number ≥ 1",
+            ))
+        }
+        Some(RawSubsteps::Count(n)) => Some(c.count("solver", "substeps", *n, 1)?),
+    };
+    let integrator = match s.integrator.as_str() {
+        "explicit" => INTEGRATOR_EXPLICIT,
+        "symplectic" | "semi-implicit" => INTEGRATOR_SYMPLECTIC,
+        other => {
+            return Err(c.err(
+                "solver",
+                "integrator",
+                format!("unknown integrator {other:?}"),
+                "use \"explicit\" or \"symplectic\"",
+            ))
+        }
+    };
+    Ok(SolverSettings {
+        fps: c.positive("solver", "fps", s.fps, "frames per second")?,
+        frames: c.count("solver", "frames", s.frames, 1)?,
+        substeps,
+        integrator,
+        settle_ke_per_particle: match s.settle_ke_per_particle_j {
+            None => None,
+            Some(v) => Some(c.positive("solver", "settle_ke_per_particle_j", v, "J")?),
+        },
+        max_substeps_per_frame: c.count(
+            "solver",
+            "max_substeps_per_frame",
+            s.max_substeps_per_frame,
+            1,
+        )?,
+    })
+}
+
+/// Validates `[output]`; the folder defaults to `out/<scene file stem>`.
+pub(super) fn parse_output(
+    c: &Checker,
+    path: &Path,
+    raw: &RawOutput,
+) -> Result<OutputSettings, InputError> {
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
+    Ok(OutputSettings {
+        dir: raw
+            .dir
+            .as_ref()
+            .map(PathBuf::from)
+            .unwrap_or_else(|| Path::new("out").join(stem)),
+        obj: raw.obj,
+        every: c.count("output", "every", raw.every, 1)?,
+    })
+}
