@@ -12,50 +12,6 @@
 @group(0) @binding(5) var pos_out: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(6) var vel_out: texture_storage_2d<rgba32float, write>;
 
-// φ outside the grid: no contact.
-const SDF_FAR: f32 = 1e30;
-
-fn node(i: u32, j: u32, k: u32) -> f32 {
-    let d = params.sdf_dims;
-    return textureLoad(sdf, texel(i + d.x * (j + d.y * k)), 0).x;
-}
-
-// Trilinear φ (w) and its gradient (xyz) at body-frame point p.
-fn sdf_sample(p: vec3<f32>) -> vec4<f32> {
-    let g = (p - params.sdf_origin.xyz) / params.sdf_origin.w;
-    let last = vec3<f32>(params.sdf_dims.xyz) - vec3<f32>(1.0);
-    if (any(g < vec3<f32>(0.0)) || any(g >= last)) {
-        return vec4<f32>(0.0, 0.0, 0.0, SDF_FAR);
-    }
-    let c = vec3<u32>(floor(g));
-    let f = g - floor(g);
-    let c000 = node(c.x, c.y, c.z);
-    let c100 = node(c.x + 1u, c.y, c.z);
-    let c010 = node(c.x, c.y + 1u, c.z);
-    let c110 = node(c.x + 1u, c.y + 1u, c.z);
-    let c001 = node(c.x, c.y, c.z + 1u);
-    let c101 = node(c.x + 1u, c.y, c.z + 1u);
-    let c011 = node(c.x, c.y + 1u, c.z + 1u);
-    let c111 = node(c.x + 1u, c.y + 1u, c.z + 1u);
-    let x00 = c000 + f.x * (c100 - c000);
-    let x10 = c010 + f.x * (c110 - c010);
-    let x01 = c001 + f.x * (c101 - c001);
-    let x11 = c011 + f.x * (c111 - c011);
-    let y0 = x00 + f.y * (x10 - x00);
-    let y1 = x01 + f.y * (x11 - x01);
-    let phi = y0 + f.z * (y1 - y0);
-    let d00 = c100 - c000;
-    let d10 = c110 - c010;
-    let d01 = c101 - c001;
-    let d11 = c111 - c011;
-    let dy0 = d00 + f.y * (d10 - d00);
-    let dy1 = d01 + f.y * (d11 - d01);
-    let gx = dy0 + f.z * (dy1 - dy0);
-    let gy = (x10 - x00) + f.z * ((x11 - x01) - (x10 - x00));
-    let gz = y1 - y0;
-    return vec4<f32>(vec3<f32>(gx, gy, gz) / params.sdf_origin.w, phi);
-}
-
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = particle_index(gid, groups);
@@ -69,7 +25,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if (p.w != 0.0) {
         let d = x - step.body_translation.xyz;
         let xb = vec3<f32>(dot(step.body_x.xyz, d), dot(step.body_y.xyz, d), dot(step.body_z.xyz, d));
-        let s = sdf_sample(xb);
+        let s = sdf_sample(sdf, params.sdf_origin, params.sdf_dims, xb);
         if (s.w < params.thickness) {
             let n = safe_normalize(step.body_x.xyz * s.x + step.body_y.xyz * s.y + step.body_z.xyz * s.z);
             if (dot(n, n) > 0.0) {

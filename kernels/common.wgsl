@@ -17,13 +17,13 @@ fn texel(i: u32) -> vec2<u32> {
 struct SimParams {
     gravity: vec4<f32>,          // xyz: m/s², w: unused
     num_particles: u32,
-    integrator: u32,             // 0 = explicit Euler, 1 = semi-implicit (symplectic) Euler
+    integrator: u32,             // 0 = explicit, 1 = semi-implicit (symplectic), 2 = implicit Euler
     dt: f32,                     // s, one substep
     air_damping: f32,            // 1/s, a = -air_damping * v
     air_density: f32,            // kg/m³, wind drag
     drag_coefficient: f32,       // 1, wind drag
     sewing_rate: f32,            // 1/s, fraction of each seam's open gap closed per second
-    _pad1: u32,
+    iterations: u32,             // Vertex Block Descent sweeps per substep (implicit Euler)
     sdf_origin: vec4<f32>,       // xyz: body-frame position of SDF node (0,0,0) in m, w: node spacing in m
     sdf_dims: vec4<u32>,         // xyz: SDF nodes along x, y, z; w: unused
     thickness: f32,              // m, collision thickness around the body
@@ -83,6 +83,15 @@ struct Seam {
     open_gap: f32,               // m, rest gap at time 0
 }
 
+// One Vertex Block Descent sweep of one colour (implicit Euler), at a 256-byte stride, selected
+// with a dynamic uniform offset: the vertices order[first .. first + count].
+struct Sweep {
+    first: u32,
+    count: u32,
+    flags: u32,                  // 2: the last iteration (records the residual)
+    _pad0: u32,
+}
+
 fn unpack_spring(t: vec4<u32>) -> SpringRef {
     return SpringRef(t.x, bitcast<f32>(t.y), bitcast<f32>(t.z), bitcast<f32>(t.w));
 }
@@ -116,4 +125,49 @@ fn safe_normalize(v: vec3<f32>) -> vec3<f32> {
         return v / len;
     }
     return vec3<f32>(0.0);
+}
+
+// φ outside the grid: no contact.
+const SDF_FAR: f32 = 1e30;
+
+fn sdf_node(sdf: texture_2d<f32>, d: vec4<u32>, i: u32, j: u32, k: u32) -> f32 {
+    return textureLoad(sdf, texel(i + d.x * (j + d.y * k)), 0).x;
+}
+
+// Trilinear φ (w) and its gradient (xyz) at body-frame point p of the body's SDF (r32float,
+// one node per texel, x fastest) with node (0,0,0) at origin.xyz, spacing origin.w and dims.xyz
+// nodes (SimParams.sdf_origin and sdf_dims). CPU twin: body::sdf::sdf_sample.
+fn sdf_sample(sdf: texture_2d<f32>, origin: vec4<f32>, dims: vec4<u32>, p: vec3<f32>) -> vec4<f32> {
+    let g = (p - origin.xyz) / origin.w;
+    let last = vec3<f32>(dims.xyz) - vec3<f32>(1.0);
+    if (any(g < vec3<f32>(0.0)) || any(g >= last)) {
+        return vec4<f32>(0.0, 0.0, 0.0, SDF_FAR);
+    }
+    let c = vec3<u32>(floor(g));
+    let f = g - floor(g);
+    let c000 = sdf_node(sdf, dims, c.x, c.y, c.z);
+    let c100 = sdf_node(sdf, dims, c.x + 1u, c.y, c.z);
+    let c010 = sdf_node(sdf, dims, c.x, c.y + 1u, c.z);
+    let c110 = sdf_node(sdf, dims, c.x + 1u, c.y + 1u, c.z);
+    let c001 = sdf_node(sdf, dims, c.x, c.y, c.z + 1u);
+    let c101 = sdf_node(sdf, dims, c.x + 1u, c.y, c.z + 1u);
+    let c011 = sdf_node(sdf, dims, c.x, c.y + 1u, c.z + 1u);
+    let c111 = sdf_node(sdf, dims, c.x + 1u, c.y + 1u, c.z + 1u);
+    let x00 = c000 + f.x * (c100 - c000);
+    let x10 = c010 + f.x * (c110 - c010);
+    let x01 = c001 + f.x * (c101 - c001);
+    let x11 = c011 + f.x * (c111 - c011);
+    let y0 = x00 + f.y * (x10 - x00);
+    let y1 = x01 + f.y * (x11 - x01);
+    let phi = y0 + f.z * (y1 - y0);
+    let d00 = c100 - c000;
+    let d10 = c110 - c010;
+    let d01 = c101 - c001;
+    let d11 = c111 - c011;
+    let dy0 = d00 + f.y * (d10 - d00);
+    let dy1 = d01 + f.y * (d11 - d01);
+    let gx = dy0 + f.z * (dy1 - dy0);
+    let gy = (x10 - x00) + f.z * ((x11 - x01) - (x10 - x00));
+    let gz = y1 - y0;
+    return vec4<f32>(vec3<f32>(gx, gy, gz) / origin.w, phi);
 }

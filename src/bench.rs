@@ -36,6 +36,7 @@ pub fn bench_model(n: u32) -> (ClothModel, SimParams, PassPlan) {
             wind: false,
             body: false,
             self_collision: false,
+            implicit: false,
         },
     );
     let dt = 0.5 * model.stable_dt(INTEGRATOR_SYMPLECTIC, 0.0).unwrap_or(1e-4);

@@ -64,8 +64,15 @@ pub struct Summary {
     pub stable_dt_estimate_s: Option<f32>,
     /// Substep length in s.
     pub dt: f32,
-    /// "explicit" or "symplectic".
+    /// "explicit", "symplectic" or "implicit".
     pub integrator: &'static str,
+    /// Vertex Block Descent sweeps per substep (implicit only).
+    pub iterations: Option<u32>,
+    /// Vertex colours, i.e. dispatches per sweep (implicit only).
+    pub colors: Option<usize>,
+    /// Largest relative residual, the unbalanced force entering the last sweep over the cloth's
+    /// weight ‖f‖/‖m·g‖, over the last substep of every output frame (implicit only).
+    pub max_residual: Option<f32>,
     /// Simulated time in s.
     pub simulated_seconds: f64,
     /// Wall time of stepping and readback in s (setup and file writing excluded).

@@ -17,6 +17,13 @@ pub enum Pass {
     WindForces,
     /// Seam penalty springs between sewn edges.
     SeamForces,
+    /// Implicit Euler 1/3: the inertial target y = x + h·v + h²·(g + f_wind/m), and the
+    /// starting guess x = y.
+    VbdInit,
+    /// Implicit Euler 2/3: Vertex Block Descent, one dispatch per colour per iteration.
+    VbdSolve,
+    /// Implicit Euler 3/3: v = (x − xₙ)/h, the next state.
+    VbdFinish,
     /// Euler integration; after every force stage.
     Integrate,
     /// Self-collision 1/5: zero the spatial hash counts.
@@ -35,11 +42,14 @@ pub enum Pass {
 
 impl Pass {
     /// Every stage, in execution order.
-    pub const ALL: [Pass; 11] = [
+    pub const ALL: [Pass; 14] = [
         Pass::SpringForces,
         Pass::BendingForces,
         Pass::WindForces,
         Pass::SeamForces,
+        Pass::VbdInit,
+        Pass::VbdSolve,
+        Pass::VbdFinish,
         Pass::Integrate,
         Pass::HashClear,
         Pass::HashCount,
@@ -56,6 +66,9 @@ impl Pass {
             Pass::BendingForces => "bending_forces",
             Pass::WindForces => "wind_forces",
             Pass::SeamForces => "seam_forces",
+            Pass::VbdInit => "vbd_init",
+            Pass::VbdSolve => "vbd_solve",
+            Pass::VbdFinish => "vbd_finish",
             Pass::Integrate => "integrate",
             Pass::HashClear => "hash_clear",
             Pass::HashCount => "hash_count",
@@ -64,6 +77,11 @@ impl Pass {
             Pass::SelfCollide => "self_collide",
             Pass::CollideBody => "collide_body",
         }
+    }
+
+    /// Whether the stage reads the forces the force stages summed (`previous_force`).
+    pub fn reads_forces(self) -> bool {
+        self.is_force() || self == Pass::VbdInit
     }
 
     /// Whether the stage adds forces.
@@ -78,7 +96,7 @@ impl Pass {
     pub fn writes_state(self) -> bool {
         matches!(
             self,
-            Pass::Integrate | Pass::SelfCollide | Pass::CollideBody
+            Pass::Integrate | Pass::VbdFinish | Pass::SelfCollide | Pass::CollideBody
         )
     }
 
@@ -89,6 +107,9 @@ impl Pass {
             Pass::BendingForces => include_str!("../kernels/bending_forces.wgsl"),
             Pass::WindForces => include_str!("../kernels/wind_forces.wgsl"),
             Pass::SeamForces => include_str!("../kernels/seam_forces.wgsl"),
+            Pass::VbdInit => include_str!("../kernels/vbd_init.wgsl"),
+            Pass::VbdSolve => include_str!("../kernels/vbd_solve.wgsl"),
+            Pass::VbdFinish => include_str!("../kernels/vbd_finish.wgsl"),
             Pass::Integrate => include_str!("../kernels/integrate.wgsl"),
             Pass::HashClear => include_str!("../kernels/hash_clear.wgsl"),
             Pass::HashCount => include_str!("../kernels/hash_count.wgsl"),
@@ -111,11 +132,13 @@ impl PassPlan {
     /// The plan for a model and the effects its scene asks for.
     pub fn new(model: &ClothModel, effects: Effects) -> Self {
         let wanted = |pass: &Pass| match pass {
-            Pass::SpringForces => !model.springs.is_empty(),
-            Pass::BendingForces => effects.bending && !model.hinges.is_empty(),
+            // Implicit Euler evaluates springs, hinges and seams inside its solve.
+            Pass::SpringForces => !effects.implicit && !model.springs.is_empty(),
+            Pass::BendingForces => !effects.implicit && effects.bending && !model.hinges.is_empty(),
             Pass::WindForces => effects.wind && !model.triangles.is_empty(),
-            Pass::SeamForces => !model.seams.is_empty(),
-            Pass::Integrate => true,
+            Pass::SeamForces => !effects.implicit && !model.seams.is_empty(),
+            Pass::VbdInit | Pass::VbdSolve | Pass::VbdFinish => effects.implicit,
+            Pass::Integrate => !effects.implicit,
             Pass::HashClear
             | Pass::HashCount
             | Pass::HashScan

@@ -4,7 +4,7 @@ use crate::atomic_file::write_atomic;
 use crate::cpu::CpuSolver;
 use crate::error::Error;
 use crate::gpu::{AdapterChoice, GpuContext, GpuSolver};
-use crate::model::layout::INTEGRATOR_EXPLICIT;
+use crate::model::layout::{INTEGRATOR_EXPLICIT, INTEGRATOR_IMPLICIT};
 use crate::output::{obj_text, Summary};
 use crate::scene::Scene;
 use crate::sim::{prepare, simulate, Prepared, RunStats};
@@ -158,11 +158,14 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
         substeps_source: if prep.auto_substeps { "auto" } else { "scene" },
         stable_dt_estimate_s: prep.stable_dt,
         dt: prep.params.dt,
-        integrator: if prep.params.integrator == INTEGRATOR_EXPLICIT {
-            "explicit"
-        } else {
-            "symplectic"
+        integrator: match prep.params.integrator {
+            INTEGRATOR_EXPLICIT => "explicit",
+            INTEGRATOR_IMPLICIT => "implicit",
+            _ => "symplectic",
         },
+        iterations: prep.colors.map(|_| prep.params.iterations),
+        colors: prep.colors,
+        max_residual: stats.max_residual,
         simulated_seconds: substeps_run * prep.params.dt as f64,
         wall_seconds: stats.wall_seconds,
         particle_substeps_per_second: if stats.wall_seconds > 0.0 {

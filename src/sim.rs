@@ -4,7 +4,7 @@
 use crate::body::motion::BodyState;
 use crate::error::Error;
 use crate::metrics;
-use crate::model::layout::{SimParams, SubstepParams};
+use crate::model::layout::{SimParams, SubstepParams, INTEGRATOR_IMPLICIT};
 use crate::model::BuiltCloth;
 use crate::model::ClothModel;
 use crate::pattern::garment::Garment;
@@ -58,6 +58,8 @@ pub struct Prepared {
     pub cpu_point_triangle: bool,
     /// Gravity, and the output frame after which it is switched on (0: from the start).
     pub gravity: (glam::Vec3, u32),
+    /// Vertex colours of the implicit solve (`None` for the explicit integrators).
+    pub colors: Option<usize>,
 }
 
 impl Prepared {
@@ -99,9 +101,17 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     let plan = PassPlan::new(&model, scene.effects());
     let s = &scene.solver;
     let frame_dt = 1.0 / s.fps;
-    let stable_dt = model.stable_dt(s.integrator, scene.air_damping);
+    let implicit = s.integrator == INTEGRATOR_IMPLICIT;
+    // Backward Euler is stable at any step: it has no bound to report or to obey.
+    let stable_dt = if implicit {
+        None
+    } else {
+        model.stable_dt(s.integrator, scene.air_damping)
+    };
     let mut warnings = Vec::new();
     let (substeps, auto_substeps) = match s.substeps {
+        Some(n) if implicit => (n, false),
+        None if implicit => (1, true),
         Some(n) => {
             let dt = frame_dt / n as f32;
             match stable_dt {
@@ -184,6 +194,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         }
     }
     let dt = frame_dt / substeps as f32;
+    let colors = implicit.then(|| model.vertex_coloring().colors());
     let wind = scene.wind;
     let body = scene.body.as_ref();
     let sdf = model.collider.as_ref().map(|c| &c.sdf);
@@ -219,7 +230,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         } else {
             0.0
         },
-        _pad1: 0,
+        iterations: s.iterations,
         sdf_origin: sdf.map_or([0.0, 0.0, 0.0, 1.0], |g| g.origin.extend(g.cell).to_array()),
         sdf_dims: sdf.map_or([0; 4], |g| [g.dims[0], g.dims[1], g.dims[2], 0]),
         thickness: body.map_or(0.0, |b| b.thickness),
@@ -258,6 +269,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
             scene.gravity,
             (scene.gravity_start / frame_dt).ceil() as u32,
         ),
+        colors,
     })
 }
 
@@ -324,6 +336,8 @@ pub struct RunStats {
     pub max_penetration_m: f32,
     /// Particles resting on the body at the last good frame (see `CONTACT_SLACK`).
     pub body_contacts: usize,
+    /// Largest relative residual of the implicit solve at any output frame.
+    pub max_residual: Option<f32>,
 }
 
 /// A particle rests on the body when it is within the collision thickness plus this of the
@@ -379,6 +393,9 @@ pub fn simulate(
                  substeps = \"auto\" or more substeps",
                 prep.params.dt
             )));
+        }
+        if let Some(r) = solver.residual()? {
+            stats.max_residual = Some(stats.max_residual.map_or(r, |m| m.max(r)));
         }
         stats.frames_run = frame;
         stats.max_edge_strain = stats.max_edge_strain.max(metrics::max_edge_strain(

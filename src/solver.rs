@@ -2,7 +2,7 @@
 
 use crate::error::Error;
 use crate::model::layout::SubstepParams;
-use glam::Vec4;
+use glam::{Vec2, Vec4};
 use serde::Serialize;
 
 /// Particle positions (w = inverse mass) and velocities, as read back at an output frame.
@@ -41,8 +41,26 @@ pub trait Solver {
     fn set_state(&mut self, state: &ParticleState);
     /// Replaces the run-constant parameters between frames (e.g. to switch gravity on).
     fn set_params(&mut self, params: &crate::model::layout::SimParams);
+    /// Implicit Euler's relative residual in the last substep: the unbalanced force entering
+    /// the last sweep over the cloth's weight (`None` for the explicit integrators).
+    fn residual(&mut self) -> Result<Option<f32>, Error> {
+        Ok(None)
+    }
     /// Waits until submitted work has finished, without reading anything back (for timing).
     fn finish(&mut self) -> Result<(), Error> {
         Ok(())
+    }
+}
+
+/// The relative residual of an implicit step from per-vertex (m²g², |f|²) pairs: the unbalanced
+/// force entering the last sweep over the cloth's weight, ‖f‖/‖m·g‖ (0 without free vertices).
+pub fn relative_residual(residual: &[Vec2]) -> f32 {
+    let (weight, force) = residual.iter().fold((0.0f64, 0.0f64), |(w, f), r| {
+        (w + r.x as f64, f + r.y as f64)
+    });
+    if weight > 0.0 {
+        (force / weight).sqrt() as f32
+    } else {
+        0.0
     }
 }

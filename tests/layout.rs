@@ -2,7 +2,7 @@
 //! every field offset, as naga lays the WGSL structs out.
 
 use drapekit::gpu::kernels::{validate_wgsl, COMMON_WGSL};
-use drapekit::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams};
+use drapekit::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep};
 use std::mem::{offset_of, size_of};
 
 fn wgsl_layout(name: &str) -> (u32, Vec<(String, u32)>) {
@@ -45,7 +45,7 @@ fn sim_params_layout() {
             ("air_density", offset_of!(SimParams, air_density)),
             ("drag_coefficient", offset_of!(SimParams, drag_coefficient)),
             ("sewing_rate", offset_of!(SimParams, sewing_rate)),
-            ("_pad1", offset_of!(SimParams, _pad1)),
+            ("iterations", offset_of!(SimParams, iterations)),
             ("sdf_origin", offset_of!(SimParams, sdf_origin)),
             ("sdf_dims", offset_of!(SimParams, sdf_dims)),
             ("thickness", offset_of!(SimParams, thickness)),
@@ -127,6 +127,20 @@ fn hinge_layout() {
             ("rest_sin_half", offset_of!(Hinge, rest_sin_half)),
             ("_pad0", offset_of!(Hinge, _pad0)),
             ("_pad1", offset_of!(Hinge, _pad1)),
+        ],
+    );
+}
+
+#[test]
+fn sweep_layout() {
+    check(
+        "Sweep",
+        size_of::<Sweep>(),
+        &[
+            ("first", offset_of!(Sweep, first)),
+            ("count", offset_of!(Sweep, count)),
+            ("flags", offset_of!(Sweep, flags)),
+            ("_pad0", offset_of!(Sweep, _pad0)),
         ],
     );
 }

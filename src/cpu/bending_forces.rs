@@ -5,6 +5,25 @@ use glam::{Vec3, Vec4};
 
 /// Force on vertex `role` of hinge `h` (roles 0, 1: shared edge; 2, 3: opposite vertices).
 pub fn hinge_force(pos: &[Vec4], h: &Hinge, role: u32) -> Vec3 {
+    match hinge_geometry(pos, h, role) {
+        Some(g) => g.weight * (g.sin_half - h.rest_sin_half) * g.u,
+        None => Vec3::ZERO,
+    }
+}
+
+/// What a hinge's force on one vertex is made of: f = weight · (sin(θ/2) − sin(θ0/2)) · u,
+/// with u the Bridson et al. (2003) direction of that vertex (the gradient of θ up to sign).
+pub struct HingeGeometry {
+    /// k·|E|²/(|N1| + |N2|), in N·m.
+    pub weight: f32,
+    /// sin(θ/2) of the signed dihedral angle.
+    pub sin_half: f32,
+    /// The vertex's direction, in 1/m.
+    pub u: Vec3,
+}
+
+/// The hinge's weight, angle and direction at vertex `role`; `None` for a degenerate hinge.
+pub fn hinge_geometry(pos: &[Vec4], h: &Hinge, role: u32) -> Option<HingeGeometry> {
     let p = |i: u32| pos[i as usize].truncate();
     let (x3, x4, x1, x2) = (p(h.v[0]), p(h.v[1]), p(h.v[2]), p(h.v[3]));
     let e = x4 - x3;
@@ -15,7 +34,7 @@ pub fn hinge_force(pos: &[Vec4], h: &Hinge, role: u32) -> Vec3 {
     let n2_sq = n2.dot(n2);
     // Degenerate triangles have no defined angle; they get no bending force.
     if e_len < 1e-12 || n1_sq < 1e-24 || n2_sq < 1e-24 {
-        return Vec3::ZERO;
+        return None;
     }
     let n1_len = n1_sq.sqrt();
     let n2_len = n2_sq.sqrt();
@@ -26,7 +45,7 @@ pub fn hinge_force(pos: &[Vec4], h: &Hinge, role: u32) -> Vec3 {
     if n1_hat.cross(n2_hat).dot(e) < 0.0 {
         sin_half = -sin_half;
     }
-    let magnitude = h.stiffness * e_len * e_len / (n1_len + n2_len) * (sin_half - h.rest_sin_half);
+    let weight = h.stiffness * e_len * e_len / (n1_len + n2_len);
     let e_hat = e / e_len;
     let a = n1 / n1_sq;
     let b = n2 / n2_sq;
@@ -36,7 +55,11 @@ pub fn hinge_force(pos: &[Vec4], h: &Hinge, role: u32) -> Vec3 {
         2 => e_len * a,
         _ => e_len * b,
     };
-    magnitude * u
+    Some(HingeGeometry {
+        weight,
+        sin_half,
+        u,
+    })
 }
 
 /// Adds each particle's bending forces to `force`, gathered over its CSR hinge references.

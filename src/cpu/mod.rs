@@ -11,6 +11,9 @@ mod integrate;
 mod seam_forces;
 mod self_collide;
 mod spring_forces;
+mod vbd_finish;
+mod vbd_init;
+mod vbd_solve;
 mod wind_forces;
 
 pub use bending_forces::{bending_forces, hinge_force};
@@ -23,14 +26,17 @@ pub use integrate::integrate;
 pub use seam_forces::{rest_gap, seam_force, seam_forces};
 pub use self_collide::{point_triangle_impulses, self_collide};
 pub use spring_forces::spring_forces;
+pub use vbd_finish::vbd_finish;
+pub use vbd_init::vbd_init;
+pub use vbd_solve::{solve3, vbd_solve, vertex_system, VbdElements};
 pub use wind_forces::wind_forces;
 
 use crate::error::Error;
-use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams};
+use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep};
 use crate::model::{ClothModel, Csr};
 use crate::plan::{Pass, PassPlan};
-use crate::solver::{AdapterReport, ParticleState, Solver};
-use glam::Vec4;
+use crate::solver::{relative_residual, AdapterReport, ParticleState, Solver};
+use glam::{Vec2, Vec4};
 
 /// The CPU backend. Holds data only for the stages in its plan.
 pub struct CpuSolver {
@@ -55,6 +61,25 @@ pub struct CpuSolver {
     self_triangles: Vec<[u32; 3]>,
     /// The cloth's edges (its stretch springs), when the body takes edge contacts.
     cloth_edges: Vec<[u32; 2]>,
+    /// Implicit Euler's data (public for per-stage parity tests).
+    pub vbd: Option<Vbd>,
+}
+
+/// Vertex Block Descent: the elements, the colour order and sweeps, and the solve's arrays.
+pub struct Vbd {
+    springs: Csr<SpringRef>,
+    hinges: Option<(Vec<Hinge>, Csr<u32>)>,
+    seams: Option<(Vec<Seam>, Csr<u32>)>,
+    /// Vertices sorted by colour.
+    pub order: Vec<u32>,
+    /// Every colour `iterations` times.
+    pub sweeps: Vec<Sweep>,
+    /// The iterate.
+    pub x: Vec<Vec4>,
+    /// The inertial target.
+    pub y: Vec<Vec4>,
+    /// |f|² per vertex before its first (x) and last (y) Newton step of the last substep.
+    pub residual: Vec<Vec2>,
 }
 
 /// The self-collision hash table and the mesh neighbours it skips.
@@ -121,6 +146,21 @@ impl CpuSolver {
             } else {
                 None
             },
+            vbd: plan.contains(Pass::VbdSolve).then(|| {
+                let coloring = model.vertex_coloring();
+                Vbd {
+                    springs: model.spring_csr(),
+                    hinges: (!model.hinges.is_empty())
+                        .then(|| (model.hinges.clone(), model.hinge_csr())),
+                    seams: (!model.seams.is_empty())
+                        .then(|| (model.seams.clone(), model.seam_csr())),
+                    sweeps: coloring.sweeps(params.iterations),
+                    order: coloring.order,
+                    x: vec![Vec4::ZERO; n],
+                    y: vec![Vec4::ZERO; n],
+                    residual: vec![Vec2::ZERO; n],
+                }
+            }),
         }
     }
 
@@ -235,6 +275,42 @@ impl CpuSolver {
                     .expect("collide_body is not in the plan");
                 self.collide(c.clone(), step);
             }
+            Pass::VbdInit => {
+                let v = self.vbd.as_mut().expect("vbd_init is not in the plan");
+                vbd_init(p, &self.pos, &self.vel, &mut self.force, &mut v.x, &mut v.y);
+            }
+            Pass::VbdSolve => {
+                let v = self.vbd.as_mut().expect("vbd_solve is not in the plan");
+                let el = VbdElements {
+                    springs: (&v.springs.offsets, &v.springs.items),
+                    hinges: v
+                        .hinges
+                        .as_ref()
+                        .map(|(h, c)| (&c.offsets[..], &c.items[..], &h[..])),
+                    seams: v
+                        .seams
+                        .as_ref()
+                        .map(|(s, c)| (&c.offsets[..], &c.items[..], &s[..])),
+                    sdf: self.collider.as_ref().map(|c| &c.sdf.values[..]),
+                };
+                for sweep in &v.sweeps {
+                    vbd_solve(
+                        p,
+                        step,
+                        sweep,
+                        &v.order,
+                        &self.pos,
+                        &v.y,
+                        &mut v.x,
+                        &mut v.residual,
+                        &el,
+                    );
+                }
+            }
+            Pass::VbdFinish => {
+                let v = self.vbd.as_ref().expect("vbd_finish is not in the plan");
+                vbd_finish(p, &v.x, &mut self.pos, &mut self.vel);
+            }
             Pass::Integrate => integrate(p, &mut self.pos, &mut self.vel, &mut self.force),
         }
     }
@@ -300,6 +376,10 @@ impl Solver for CpuSolver {
 
     fn set_params(&mut self, params: &SimParams) {
         self.params = *params;
+    }
+
+    fn residual(&mut self) -> Result<Option<f32>, Error> {
+        Ok(self.vbd.as_ref().map(|v| relative_residual(&v.residual)))
     }
 
     /// Replaces positions and velocities and clears forces.

@@ -32,12 +32,83 @@ impl ForceInput {
     }
 }
 
-/// The complete WGSL source of a stage. Force stages get `previous_force` from `input`
-/// (appended, so that line numbers in the stage file stay offset by `common.wgsl` only);
-/// `integrate` ignores it.
+/// The optional energies of `vbd_solve`: its `// section NAME` … `// else NAME` … `// end NAME`
+/// blocks keep the section when the scene has the energy and the `else` part when not.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VbdEnergies {
+    /// Dihedral hinges.
+    pub bending: bool,
+    /// Seam pairs.
+    pub seams: bool,
+    /// Body contact.
+    pub body: bool,
+}
+
+impl VbdEnergies {
+    /// Every combination, for validation.
+    pub const ALL: [VbdEnergies; 8] = {
+        let mut all = [VbdEnergies {
+            bending: false,
+            seams: false,
+            body: false,
+        }; 8];
+        let mut k = 0;
+        while k < 8 {
+            all[k] = VbdEnergies {
+                bending: k & 1 != 0,
+                seams: k & 2 != 0,
+                body: k & 4 != 0,
+            };
+            k += 1;
+        }
+        all
+    };
+}
+
+/// The complete WGSL source of a stage, with every optional section in. Stages that read the
+/// forces summed so far get `previous_force` from `input` (appended, so that line numbers in
+/// the stage file stay offset by `common.wgsl` only).
 pub fn compose(pass: Pass, input: ForceInput) -> String {
-    let tail = if pass.is_force() { input.wgsl() } else { "" };
-    format!("{COMMON_WGSL}\n{}\n{tail}", pass.kernel_source())
+    compose_with(pass, input, VbdEnergies::ALL[7])
+}
+
+/// `compose`, keeping only the sections of the energies in `energies`. Dropped lines become
+/// empty lines, so line numbers in errors still match the stage file.
+pub fn compose_with(pass: Pass, input: ForceInput, energies: VbdEnergies) -> String {
+    let tail = if pass.reads_forces() {
+        input.wgsl()
+    } else {
+        ""
+    };
+    let mut body = String::new();
+    // None: outside any section; Some(keep): inside a section or its else part.
+    let mut keep: Option<bool> = None;
+    for line in pass.kernel_source().lines() {
+        let t = line.trim();
+        let enabled = |name: &str| match name {
+            "bending" => energies.bending,
+            "seams" => energies.seams,
+            "body" => energies.body,
+            _ => true,
+        };
+        let marker = if let Some(name) = t.strip_prefix("// section ") {
+            keep = Some(enabled(name));
+            true
+        } else if let Some(name) = t.strip_prefix("// else ") {
+            keep = Some(!enabled(name));
+            true
+        } else if t.starts_with("// end ") {
+            keep = None;
+            true
+        } else {
+            false
+        };
+        if !marker && keep.unwrap_or(true) {
+            body.push_str(line);
+        }
+        body.push('\n');
+    }
+    format!("{COMMON_WGSL}\n{body}\n{tail}")
 }
 
 /// Parses and validates a WGSL source with naga; errors come formatted with line and caret.

@@ -2,9 +2,8 @@
 //! list of bindings per stage so that layout and group cannot disagree.
 
 use super::context::GpuContext;
-use super::kernels::{compose, ForceInput};
 use super::texels::TexelArray;
-use crate::model::layout::SubstepParams;
+use crate::model::layout::{SubstepParams, Sweep};
 use crate::plan::Pass;
 use std::num::NonZeroU64;
 
@@ -14,6 +13,10 @@ pub(super) enum Binding<'a> {
     Uniform(&'a wgpu::Buffer),
     /// One `SubstepParams` at a dynamic offset.
     SubstepUniform(&'a wgpu::Buffer),
+    /// One `Sweep` at a dynamic offset.
+    SweepUniform(&'a wgpu::Buffer),
+    /// An unused binding number (an optional kernel section that was left out).
+    Gap,
     /// Read with textureLoad.
     Read(&'a TexelArray),
     /// Written with textureStore.
@@ -32,22 +35,34 @@ pub(super) struct Stage {
     /// The force texture this stage writes.
     pub(super) force_out: Option<usize>,
     pub(super) uses_substep: bool,
+    /// `vbd_solve` only: one (sweep uniform offset, workgroups) per dispatch of a substep.
+    pub(super) sweeps: Vec<(u32, (u32, u32))>,
     /// Workgroups in x and y.
     pub(super) dispatch: (u32, u32),
 }
 
+/// Bytes of one entry of a dynamic uniform array.
+fn dynamic_size(b: &Binding) -> u64 {
+    match b {
+        Binding::SweepUniform(_) => std::mem::size_of::<Sweep>() as u64,
+        _ => std::mem::size_of::<SubstepParams>() as u64,
+    }
+}
+
 /// The layout entry of one binding.
 fn layout_entry(binding: u32, b: &Binding) -> wgpu::BindGroupLayoutEntry {
-    let substep_size = NonZeroU64::new(std::mem::size_of::<SubstepParams>() as u64);
     let ty = match b {
-        Binding::Uniform(_) | Binding::SubstepUniform(_) => {
-            let dynamic = matches!(b, Binding::SubstepUniform(_));
-            wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: dynamic,
-                min_binding_size: if dynamic { substep_size } else { None },
-            }
-        }
+        Binding::Uniform(_) => wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        Binding::SubstepUniform(_) | Binding::SweepUniform(_) => wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: true,
+            min_binding_size: NonZeroU64::new(dynamic_size(b)),
+        },
+        Binding::Gap => unreachable!("gaps have no layout entry"),
         Binding::Read(t) => wgpu::BindingType::Texture {
             sample_type: t.sample_type(),
             view_dimension: wgpu::TextureViewDimension::D2,
@@ -79,11 +94,14 @@ fn group_entry<'a>(binding: u32, b: &Binding<'a>) -> wgpu::BindGroupEntry<'a> {
     let resource = match *b {
         Binding::Uniform(buffer) => buffer.as_entire_binding(),
         // The dynamic binding covers one entry; the offset selects which.
-        Binding::SubstepUniform(buffer) => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-            buffer,
-            offset: 0,
-            size: NonZeroU64::new(std::mem::size_of::<SubstepParams>() as u64),
-        }),
+        Binding::SubstepUniform(buffer) | Binding::SweepUniform(buffer) => {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer,
+                offset: 0,
+                size: NonZeroU64::new(dynamic_size(b)),
+            })
+        }
+        Binding::Gap => unreachable!("gaps have no bind group entry"),
         Binding::Read(t) | Binding::Write(t) => wgpu::BindingResource::TextureView(&t.view),
         Binding::Storage(buffer, _) => buffer.as_entire_binding(),
     };
@@ -97,6 +115,7 @@ fn bind_groups<const K: usize>(
     lists: [&[Binding]; K],
 ) -> (wgpu::BindGroupLayout, [wgpu::BindGroup; K]) {
     let entries: Vec<_> = (lists[0].iter().enumerate())
+        .filter(|(_, b)| !matches!(b, Binding::Gap))
         .map(|(i, b)| layout_entry(i as u32, b))
         .collect();
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -105,6 +124,7 @@ fn bind_groups<const K: usize>(
     });
     let groups = lists.map(|list| {
         let entries: Vec<_> = (list.iter().enumerate())
+            .filter(|(_, b)| !matches!(b, Binding::Gap))
             .map(|(i, b)| group_entry(i as u32, b))
             .collect();
         device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -116,11 +136,12 @@ fn bind_groups<const K: usize>(
     (layout, groups)
 }
 
-/// One stage's pipeline and bind groups (one per state parity).
+/// One stage's pipeline (from its composed WGSL `source`) and bind groups (one per state
+/// parity).
 pub(super) fn build_stage(
     ctx: &GpuContext,
     pass: Pass,
-    input: ForceInput,
+    source: String,
     state_bindings: [&[Binding]; 2],
     force_in: Option<&[Binding]>,
     force_out: Option<usize>,
@@ -140,7 +161,7 @@ pub(super) fn build_stage(
     });
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(pass.name()),
-        source: wgpu::ShaderSource::Wgsl(compose(pass, input).into()),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
     });
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(pass.name()),
@@ -160,5 +181,6 @@ pub(super) fn build_stage(
         uses_substep: state_bindings[0]
             .iter()
             .any(|b| matches!(b, Binding::SubstepUniform(_))),
+        sweeps: Vec::new(),
     }
 }

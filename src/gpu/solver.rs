@@ -7,11 +7,11 @@
 //! and reads `forces[(j + 1) % 2]`, except the first, which starts from zero.
 
 use super::context::GpuContext;
-use super::kernels::ForceInput;
+use super::kernels::{compose_with, ForceInput, VbdEnergies};
 use super::pipelines::{build_stage, Binding, Stage};
 use super::texels::TexelArray;
 use crate::error::Error;
-use crate::model::layout::{SimParams, SubstepParams, WORKGROUP_SIZE};
+use crate::model::layout::{SimParams, SubstepParams, Sweep, WORKGROUP_SIZE};
 use crate::model::ClothModel;
 use crate::plan::{Pass, PassPlan};
 use crate::solver::{AdapterReport, ParticleState, Solver};
@@ -34,6 +34,18 @@ pub(super) struct SubstepBuffer {
     pub(super) capacity: usize,
 }
 
+/// Implicit Euler's buffers: the iterate, the inertial target, the residual pairs, and the
+/// sweep table (one `Sweep` per dispatch at a uniform-offset stride).
+pub(super) struct VbdBuffers {
+    pub(super) x: wgpu::Buffer,
+    pub(super) y: wgpu::Buffer,
+    pub(super) residual: wgpu::Buffer,
+    pub(super) sweep_buffer: wgpu::Buffer,
+    pub(super) sweep_stride: u64,
+    pub(super) sweeps: Vec<Sweep>,
+    pub(super) order: Vec<u32>,
+}
+
 /// The wgpu backend. Creates textures, buffers and pipelines only for the stages in its plan.
 pub struct GpuSolver {
     pub(super) ctx: GpuContext,
@@ -51,6 +63,7 @@ pub struct GpuSolver {
     pub(super) stages: Vec<Stage>,
     pub(super) resource_labels: Vec<&'static str>,
     pub(super) hash: Option<HashBuffers>,
+    pub(super) vbd: Option<VbdBuffers>,
 }
 
 impl GpuSolver {
@@ -83,7 +96,13 @@ impl GpuSolver {
         let pos = state("positions", &model.packed_positions())?;
         let vel = state("velocities", &model.packed_velocities())?;
         let force_stages = plan.passes.iter().filter(|p| p.is_force()).count();
-        let forces = (0..force_stages.clamp(1, 2))
+        // `integrate` always reads a force texture; implicit steps need one only for wind.
+        let force_textures = if plan.contains(Pass::Integrate) {
+            force_stages.clamp(1, 2)
+        } else {
+            force_stages.min(2)
+        };
+        let forces = (0..force_textures)
             .map(|_| TexelArray::new(ctx, "forces", Rgba32Float, n, state_usage))
             .collect::<Result<Vec<_>, _>>()?;
         let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -93,9 +112,14 @@ impl GpuSolver {
             mapped_at_creation: false,
         });
 
-        let needs_substep = [Pass::WindForces, Pass::SeamForces, Pass::CollideBody]
-            .into_iter()
-            .any(|p| plan.contains(p));
+        let needs_substep = [
+            Pass::WindForces,
+            Pass::SeamForces,
+            Pass::CollideBody,
+            Pass::VbdSolve,
+        ]
+        .into_iter()
+        .any(|p| plan.contains(p));
         let substeps = needs_substep.then(|| {
             labels.push("substep_params");
             let align = ctx.device.limits().min_uniform_buffer_offset_alignment as u64;
@@ -133,6 +157,54 @@ impl GpuSolver {
                 sorted: buffer("hash_sorted", n as u64),
             }
         });
+        let vbd = plan.contains(Pass::VbdSolve).then(|| {
+            let coloring = model.vertex_coloring();
+            let sweeps = coloring.sweeps(params.iterations);
+            let mut storage = |label: &'static str, bytes: u64| {
+                labels.push(label);
+                ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: bytes.max(16),
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_SRC
+                        | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            };
+            let x = storage("vbd_x", 16 * n as u64);
+            let y = storage("vbd_y", 16 * n as u64);
+            let residual = storage("vbd_residual", 8 * n as u64);
+
+            labels.push("vbd_sweeps");
+            let align = ctx.device.limits().min_uniform_buffer_offset_alignment as u64;
+            let stride = (std::mem::size_of::<Sweep>() as u64).next_multiple_of(align);
+            let mut bytes = vec![0u8; (stride as usize * sweeps.len()).max(stride as usize)];
+            for (k, s) in sweeps.iter().enumerate() {
+                let at = k * stride as usize;
+                bytes[at..at + std::mem::size_of::<Sweep>()].copy_from_slice(bytemuck::bytes_of(s));
+            }
+            let sweep_buffer = ctx
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("vbd_sweeps"),
+                    contents: &bytes,
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+            VbdBuffers {
+                x,
+                y,
+                residual,
+                sweep_buffer,
+                sweep_stride: stride,
+                sweeps,
+                order: coloring.order,
+            }
+        });
+        let energies = VbdEnergies {
+            bending: !model.hinges.is_empty(),
+            seams: !model.seams.is_empty(),
+            body: plan.contains(Pass::CollideBody),
+        };
         let dispatch_for = |threads: u32| {
             let total = threads.div_ceil(WORKGROUP_SIZE).max(1);
             let max_x = ctx.device.limits().max_compute_workgroups_per_dimension;
@@ -204,17 +276,48 @@ impl GpuSolver {
                     let c = model.collider.as_ref().expect("collide_body needs a body");
                     add("sdf", R32Float, bytemuck::cast_slice(&c.sdf.values))?;
                 }
-                Pass::Integrate => {}
+                Pass::VbdSolve => {
+                    let v = vbd.as_ref().expect("vbd buffers");
+                    add("vbd_order", R32Uint, bytemuck::cast_slice(&v.order))?;
+                    let csr = model.spring_csr();
+                    add(
+                        "spring_offsets",
+                        R32Uint,
+                        bytemuck::cast_slice(&csr.offsets),
+                    )?;
+                    add("springs", Rgba32Uint, bytemuck::cast_slice(&csr.items))?;
+                    if energies.bending {
+                        let csr = model.hinge_csr();
+                        add("hinge_offsets", R32Uint, bytemuck::cast_slice(&csr.offsets))?;
+                        add("hinge_refs", R32Uint, bytemuck::cast_slice(&csr.items))?;
+                        add("hinges", Rgba32Uint, bytemuck::cast_slice(&model.hinges))?;
+                    }
+                    if energies.seams {
+                        let csr = model.seam_csr();
+                        add("seam_offsets", R32Uint, bytemuck::cast_slice(&csr.offsets))?;
+                        add("seam_refs", R32Uint, bytemuck::cast_slice(&csr.items))?;
+                        add("seams", Rgba32Uint, bytemuck::cast_slice(&model.seams))?;
+                    }
+                    if energies.body {
+                        let c = model.collider.as_ref().expect("contact needs a body");
+                        add("vbd_sdf", R32Float, bytemuck::cast_slice(&c.sdf.values))?;
+                    }
+                }
+                Pass::VbdInit | Pass::VbdFinish | Pass::Integrate => {}
             }
             let (force_out, force_in) = if pass.is_force() {
                 let j = force_index;
                 force_index += 1;
                 (Some(j % 2), (j > 0).then_some((j + 1) % 2))
+            } else if pass.reads_forces() {
+                // vbd_init reads the last force stage's sum, if any ran.
+                (None, (force_index > 0).then(|| (force_index - 1) % 2))
             } else {
                 (None, None)
             };
             // The forces integrate reads: the last force stage's output (zero if none ran).
-            let summed = (force_stages + 1) % 2 % forces.len();
+            let summed = (force_stages + 1) % 2 % forces.len().max(1);
+            let vb = || vbd.as_ref().expect("vbd buffers");
             let substep_buf = substeps.as_ref().map(|s| &s.buffer);
             let hb = || hash.as_ref().expect("self-collision buffers");
             let bindings = |p: usize| -> Vec<Binding> {
@@ -300,6 +403,47 @@ impl GpuSolver {
                         Binding::Write(&pos[1 - p]),
                         Binding::Write(&vel[1 - p]),
                     ],
+                    Pass::VbdInit => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Read(&pos[p]),
+                        Binding::Read(&vel[p]),
+                        Binding::Storage(&vb().x, false),
+                        Binding::Storage(&vb().y, false),
+                    ],
+                    Pass::VbdSolve => {
+                        let mut list = vec![
+                            Binding::Uniform(&params_buf),
+                            Binding::SubstepUniform(substep_buf.expect("vbd needs substep params")),
+                            Binding::SweepUniform(&vb().sweep_buffer),
+                            Binding::Read(&pos[p]),
+                            Binding::Storage(&vb().x, false),
+                            Binding::Storage(&vb().y, true),
+                            Binding::Storage(&vb().residual, false),
+                            o(0),
+                            o(1),
+                            o(2),
+                        ];
+                        let mut next = 3;
+                        let sections = [
+                            (energies.bending, 3),
+                            (energies.seams, 3),
+                            (energies.body, 1),
+                        ];
+                        for (on, count) in sections {
+                            for _ in 0..count {
+                                list.push(if on { o(next) } else { Binding::Gap });
+                                next += on as usize;
+                            }
+                        }
+                        list
+                    }
+                    Pass::VbdFinish => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Read(&pos[p]),
+                        Binding::Storage(&vb().x, true),
+                        Binding::Write(&pos[1 - p]),
+                        Binding::Write(&vel[1 - p]),
+                    ],
                     Pass::Integrate => vec![
                         Binding::Uniform(&params_buf),
                         Binding::Read(&pos[p]),
@@ -321,15 +465,22 @@ impl GpuSolver {
                 Pass::HashScan => (1, 1),
                 _ => dispatch_for(n as u32),
             };
-            stages.push(build_stage(
+            let mut stage = build_stage(
                 ctx,
                 pass,
-                input,
+                compose_with(pass, input, energies),
                 [&bindings(0), &bindings(1)],
                 force_in.as_ref().map(|b| &b[..]),
                 force_out,
                 dispatch,
-            ));
+            );
+            if pass == Pass::VbdSolve {
+                let v = vb();
+                stage.sweeps = (v.sweeps.iter().enumerate())
+                    .map(|(k, s)| ((k as u64 * v.sweep_stride) as u32, dispatch_for(s.count)))
+                    .collect();
+            }
+            stages.push(stage);
         }
 
         Ok(GpuSolver {
@@ -346,6 +497,7 @@ impl GpuSolver {
             stages,
             resource_labels: labels,
             hash,
+            vbd,
         })
     }
 
@@ -380,6 +532,21 @@ impl Solver for GpuSolver {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| Error::Gpu(format!("waiting for the GPU failed: {e}")))?;
         Ok(())
+    }
+
+    fn residual(&mut self) -> Result<Option<f32>, Error> {
+        match &self.vbd {
+            Some(v) => {
+                let pairs: Vec<glam::Vec2> = self
+                    .read_f32(&v.residual)?
+                    .chunks_exact(2)
+                    .take(self.n)
+                    .map(|c| glam::Vec2::new(c[0], c[1]))
+                    .collect();
+                Ok(Some(crate::solver::relative_residual(&pairs)))
+            }
+            None => Ok(None),
+        }
     }
 
     fn set_params(&mut self, params: &SimParams) {

@@ -23,8 +23,8 @@ pub struct SimParams {
     pub drag_coefficient: f32,
     /// Fraction of each seam's open gap closed per second (1 / sewing time), in 1/s.
     pub sewing_rate: f32,
-    /// Padding to a 16-byte multiple.
-    pub _pad1: u32,
+    /// Vertex Block Descent sweeps per substep (implicit Euler; unused otherwise).
+    pub iterations: u32,
     /// Body-frame position of SDF node (0, 0, 0) in m (xyz); w: node spacing in m.
     pub sdf_origin: [f32; 4],
     /// SDF nodes along x, y, z; w unused.
@@ -122,8 +122,26 @@ pub struct Seam {
     pub open_gap: f32,
 }
 
+/// One Vertex Block Descent sweep of one colour: the `count` vertices at `first` in the colour
+/// order. One entry per (iteration, colour), selected by a dynamic uniform offset.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Sweep {
+    /// First entry of the colour in the colour order.
+    pub first: u32,
+    /// Vertices of the colour.
+    pub count: u32,
+    /// `SWEEP_LAST` in the last iteration, which records the residual.
+    pub flags: u32,
+    /// Padding to 16 bytes.
+    pub _pad0: u32,
+}
+
+/// `Sweep::flags` bit of the last iteration.
+pub const SWEEP_LAST: u32 = 2;
+
 /// Integrator codes shared with `integrate.wgsl`.
-pub use crate::scene::{INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC};
+pub use crate::scene::{INTEGRATOR_EXPLICIT, INTEGRATOR_IMPLICIT, INTEGRATOR_SYMPLECTIC};
 /// Width in texels of every data texture, as `TEXELS_PER_ROW` in common.wgsl.
 pub const TEXELS_PER_ROW: u32 = 2048;
 /// Threads per workgroup, as `WORKGROUP_SIZE` in common.wgsl.

@@ -4,9 +4,11 @@
 
 mod build;
 mod collider;
+mod coloring;
 pub mod layout;
 
 pub use build::BuiltCloth;
+pub use coloring::Coloring;
 
 use crate::mesh::TriMesh;
 use crate::scene::Fabric;

@@ -6,6 +6,7 @@ mod body;
 mod cloth;
 mod fabric;
 mod pins;
+mod presets;
 mod raw;
 mod self_collision;
 mod solver;
@@ -15,8 +16,11 @@ pub use body::{BodySettings, BodySource};
 pub use cloth::ClothSource;
 pub use fabric::Fabric;
 pub use pins::{Corner, GridEdge, PinSelection};
+pub use presets::{preset, FabricPreset, PRESETS};
 pub use self_collision::SelfCollision;
-pub use solver::{OutputSettings, SolverSettings, INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC};
+pub use solver::{
+    OutputSettings, SolverSettings, INTEGRATOR_EXPLICIT, INTEGRATOR_IMPLICIT, INTEGRATOR_SYMPLECTIC,
+};
 pub use world::Wind;
 
 use crate::check::Checker;
@@ -36,6 +40,8 @@ pub struct Effects {
     pub body: bool,
     /// Self-collision is on.
     pub self_collision: bool,
+    /// Backward Euler (Vertex Block Descent) instead of an explicit force-then-integrate step.
+    pub implicit: bool,
 }
 
 /// A validated scene in SI units.
@@ -99,9 +105,8 @@ impl Scene {
         })?;
         let c = Checker { path, src };
         let base = path.parent().unwrap_or(Path::new("."));
-        let stretch = raw.fabric.stretch_stiffness_n_m;
-        let cloth = cloth::parse(&c, base, raw.cloth, stretch)?;
         let fabric = fabric::parse(&c, &raw.fabric)?;
+        let cloth = cloth::parse(&c, base, raw.cloth, fabric.stretch_stiffness as f64)?;
         let pins = pins::parse(&c, &raw.pins, &cloth)?;
         let world = world::parse_world(&c, &raw.world)?;
         let wind = world::parse_wind(&c, &raw.wind)?;
@@ -153,6 +158,7 @@ impl Scene {
             wind: self.wind.is_some(),
             body: self.body.is_some(),
             self_collision: self.self_collision.is_some(),
+            implicit: self.solver.integrator == INTEGRATOR_IMPLICIT,
         }
     }
 }

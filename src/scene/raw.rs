@@ -113,15 +113,11 @@ pub(super) struct RawMesh {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawFabric {
-    pub(super) density_kg_m2: f64,
-    pub(super) stretch_stiffness_n_m: f64,
+    pub(super) preset: Option<String>,
+    pub(super) density_kg_m2: Option<f64>,
+    pub(super) stretch_stiffness_n_m: Option<f64>,
     pub(super) bending_stiffness_n_m: Option<f64>,
-    #[serde(default = "default_damping_ratio")]
-    pub(super) damping_ratio: f64,
-}
-
-fn default_damping_ratio() -> f64 {
-    0.05
+    pub(super) damping_ratio: Option<f64>,
 }
 
 #[derive(Deserialize, Default)]
@@ -196,6 +192,8 @@ pub(super) struct RawSolver {
     pub(super) substeps: Option<RawSubsteps>,
     #[serde(default = "default_integrator")]
     pub(super) integrator: String,
+    #[serde(default = "default_iterations")]
+    pub(super) iterations: i64,
     pub(super) settle_ke_per_particle_j: Option<f64>,
     #[serde(default = "default_max_substeps")]
     pub(super) max_substeps_per_frame: i64,
@@ -204,6 +202,14 @@ pub(super) struct RawSolver {
 fn default_fps() -> f64 {
     24.0
 }
+/// Sweeps per implicit substep; README.md ("Implicit Euler") shows the residual it leaves.
+fn default_iterations() -> i64 {
+    DEFAULT_ITERATIONS
+}
+
+/// The default of `[solver] iterations`.
+pub(super) const DEFAULT_ITERATIONS: i64 = 10;
+
 fn default_integrator() -> String {
     "symplectic".into()
 }

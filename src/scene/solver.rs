@@ -9,6 +9,8 @@ use std::path::{Path, PathBuf};
 pub const INTEGRATOR_EXPLICIT: u32 = 0;
 /// Semi-implicit (symplectic) Euler.
 pub const INTEGRATOR_SYMPLECTIC: u32 = 1;
+/// Backward (implicit) Euler, solved by Vertex Block Descent.
+pub const INTEGRATOR_IMPLICIT: u32 = 2;
 
 /// Solver settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -19,8 +21,10 @@ pub struct SolverSettings {
     pub frames: u32,
     /// Substeps per frame, or `None` for automatic from the stability bound.
     pub substeps: Option<u32>,
-    /// `INTEGRATOR_EXPLICIT` or `INTEGRATOR_SYMPLECTIC`.
+    /// `INTEGRATOR_EXPLICIT`, `INTEGRATOR_SYMPLECTIC` or `INTEGRATOR_IMPLICIT`.
     pub integrator: u32,
+    /// Vertex Block Descent sweeps per substep (implicit only).
+    pub iterations: u32,
     /// Stop once kinetic energy per free particle falls below this (J).
     pub settle_ke_per_particle: Option<f32>,
     /// The most substeps per frame `auto` may choose before the scene is refused.
@@ -56,12 +60,13 @@ pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings,
     let integrator = match s.integrator.as_str() {
         "explicit" => INTEGRATOR_EXPLICIT,
         "symplectic" | "semi-implicit" => INTEGRATOR_SYMPLECTIC,
+        "implicit" | "backward" => INTEGRATOR_IMPLICIT,
         other => {
             return Err(c.err(
                 "solver",
                 "integrator",
                 format!("unknown integrator {other:?}"),
-                "use \"explicit\" or \"symplectic\"",
+                "use \"explicit\", \"symplectic\" or \"implicit\"",
             ))
         }
     };
@@ -70,6 +75,7 @@ pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings,
         frames: c.count("solver", "frames", s.frames, 1)?,
         substeps,
         integrator,
+        iterations: c.count("solver", "iterations", s.iterations, 1)?,
         settle_ke_per_particle: match s.settle_ke_per_particle_j {
             None => None,
             Some(v) => Some(c.positive("solver", "settle_ke_per_particle_j", v, "J")?),

@@ -1,0 +1,234 @@
+// Implicit Euler 2/3: one Vertex Block Descent sweep (Chen, Macklin et al. 2024) over the
+// vertices of one colour. Each vertex takes one Newton step x += H⁻¹f on the incremental
+// potential ½‖x − y‖²_M / h² + E(x) with its neighbours held fixed; vertices of one colour share
+// no element, so they never read each other's new position. Dispatched once per colour per
+// iteration, the sweep chosen by a dynamic offset. The bending and seam sections are composed in
+// only when the scene has hinges, seams or a body. CPU twin: src/cpu/vbd_solve.rs (energies and
+// Hessians documented there).
+
+@group(0) @binding(0) var<uniform> params: SimParams;
+@group(0) @binding(1) var<uniform> step: SubstepParams;          // dynamic offset per substep
+@group(0) @binding(2) var<uniform> sweep: Sweep;                 // dynamic offset per sweep
+@group(0) @binding(3) var pos: texture_2d<f32>;                   // xₙ, w = inverse mass
+@group(0) @binding(4) var<storage, read_write> x: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> y: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> residual: array<vec2<f32>>;
+@group(0) @binding(7) var order: texture_2d<u32>;                // r32uint: vertices by colour
+@group(0) @binding(8) var spring_offsets: texture_2d<u32>;       // r32uint, N + 1 entries
+@group(0) @binding(9) var springs: texture_2d<u32>;              // one SpringRef per texel
+
+// The weight scale of the residual when gravity is off (a zero-gravity sewing phase), m/s².
+const STANDARD_GRAVITY: f32 = 9.80665;
+
+fn outer(a: vec3<f32>, b: vec3<f32>) -> mat3x3<f32> {
+    return mat3x3<f32>(a * b.x, a * b.y, a * b.z);
+}
+
+fn diagonal(v: f32) -> mat3x3<f32> {
+    return mat3x3<f32>(v, 0.0, 0.0, 0.0, v, 0.0, 0.0, 0.0, v);
+}
+
+// How far vertex j has moved from xₙ in this step.
+fn moved(j: u32) -> vec3<f32> {
+    return x[j].xyz - textureLoad(pos, texel(j), 0).xyz;
+}
+
+// Hessian of ½k(|d| − L)², made positive semi-definite (the transverse term of a compressed
+// spring is dropped).
+fn spring_hessian(k: f32, rest: f32, d: vec3<f32>, len: f32) -> mat3x3<f32> {
+    let n = d / len;
+    let nn = outer(n, n);
+    let transverse = max(1.0 - rest / len, 0.0);
+    return k * nn + (k * transverse) * (diagonal(1.0) - nn);
+}
+
+fn add_springs(i: u32, xi: vec3<f32>, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {
+    let h = params.dt;
+    let first = textureLoad(spring_offsets, texel(i), 0).x;
+    let end = textureLoad(spring_offsets, texel(i + 1u), 0).x;
+    for (var k = first; k < end; k = k + 1u) {
+        let s = unpack_spring(textureLoad(springs, texel(k), 0));
+        let d = xi - x[s.other].xyz;
+        let len = length(d);
+        if (len > 1e-12) {
+            let n = d / len;
+            let closing = dot(n, moved(i) - moved(s.other));
+            *f = *f - (s.stiffness * (len - s.rest_length) + s.damping / h * closing) * n;
+            *hs = *hs + (spring_hessian(s.stiffness, s.rest_length, d, len) + (s.damping / h) * outer(n, n));
+        }
+    }
+}
+
+// section bending
+@group(0) @binding(10) var hinge_offsets: texture_2d<u32>;     // r32uint, N + 1 entries
+@group(0) @binding(11) var hinge_refs: texture_2d<u32>;        // r32uint: hinge index * 4 + role
+@group(0) @binding(12) var hinges: texture_2d<u32>;            // two texels per Hinge
+
+// The bending force on vertex `role` of h at the iterate (as bending_forces.wgsl) plus its
+// Gauss–Newton Hessian ½cos(θ/2)·weight·uuᵀ.
+fn add_hinge(hinge: Hinge, role: u32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {
+    let x3 = x[hinge.v.x].xyz;
+    let x4 = x[hinge.v.y].xyz;
+    let x1 = x[hinge.v.z].xyz;
+    let x2 = x[hinge.v.w].xyz;
+    let e = x4 - x3;
+    let n1 = cross(x1 - x3, x1 - x4);
+    let n2 = cross(x2 - x4, x2 - x3);
+    let e_len = length(e);
+    let n1_sq = dot(n1, n1);
+    let n2_sq = dot(n2, n2);
+    if (e_len < 1e-12 || n1_sq < 1e-24 || n2_sq < 1e-24) {
+        return;
+    }
+    let n1_len = sqrt(n1_sq);
+    let n2_len = sqrt(n2_sq);
+    let n1_hat = n1 / n1_len;
+    let n2_hat = n2 / n2_len;
+    let cos_theta = clamp(dot(n1_hat, n2_hat), -1.0, 1.0);
+    var sin_half = sqrt(max(0.0, 0.5 * (1.0 - cos_theta)));
+    if (dot(cross(n1_hat, n2_hat), e) < 0.0) {
+        sin_half = -sin_half;
+    }
+    let weight = hinge.stiffness * e_len * e_len / (n1_len + n2_len);
+    let e_hat = e / e_len;
+    let a = n1 / n1_sq;
+    let b = n2 / n2_sq;
+    var u = vec3<f32>(0.0);
+    switch role {
+        case 0u: { u = dot(x1 - x4, e_hat) * a + dot(x2 - x4, e_hat) * b; }
+        case 1u: { u = -dot(x1 - x3, e_hat) * a - dot(x2 - x3, e_hat) * b; }
+        case 2u: { u = e_len * a; }
+        default: { u = e_len * b; }
+    }
+    *f = *f + weight * (sin_half - hinge.rest_sin_half) * u;
+    let cos_half = sqrt(max(1.0 - sin_half * sin_half, 0.0));
+    *hs = *hs + (0.5 * cos_half * weight) * outer(u, u);
+}
+
+fn add_bending(i: u32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {
+    let first = textureLoad(hinge_offsets, texel(i), 0).x;
+    let end = textureLoad(hinge_offsets, texel(i + 1u), 0).x;
+    for (var k = first; k < end; k = k + 1u) {
+        let r = textureLoad(hinge_refs, texel(k), 0).x;
+        let h = r / 4u;
+        let hinge = unpack_hinge(textureLoad(hinges, texel(2u * h), 0), textureLoad(hinges, texel(2u * h + 1u), 0));
+        add_hinge(hinge, r % 4u, f, hs);
+    }
+}
+// else bending
+fn add_bending(i: u32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {}
+// end bending
+
+// section seams
+@group(0) @binding(13) var seam_offsets: texture_2d<u32>;      // r32uint, N + 1 entries
+@group(0) @binding(14) var seam_refs: texture_2d<u32>;         // r32uint: pair index * 4 + role
+@group(0) @binding(15) var seams: texture_2d<u32>;             // two texels per Seam
+
+fn add_seams(i: u32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {
+    let h = params.dt;
+    let first = textureLoad(seam_offsets, texel(i), 0).x;
+    let end = textureLoad(seam_offsets, texel(i + 1u), 0).x;
+    for (var k = first; k < end; k = k + 1u) {
+        let r = textureLoad(seam_refs, texel(k), 0).x;
+        let p = r / 4u;
+        let s = unpack_seam(textureLoad(seams, texel(2u * p), 0), textureLoad(seams, texel(2u * p + 1u), 0));
+        let w = s.weight;
+        let xa = x[s.v.x].xyz;
+        let gap = (1.0 - w) * x[s.v.y].xyz + w * x[s.v.z].xyz - xa;
+        let opening = (1.0 - w) * moved(s.v.y) + w * moved(s.v.z) - moved(s.v.x);
+        let rest = s.open_gap * max(1.0 - params.sewing_rate * step.time, 0.0);
+        // Force and Hessian on the seam vertex; the partner's ends take shares of them.
+        var fa = s.damping / h * opening;
+        var ha = diagonal(s.damping / h);
+        if (rest <= 0.0) {
+            fa = fa + s.stiffness * gap;
+            ha = ha + diagonal(s.stiffness);
+        } else {
+            let d = length(gap);
+            if (d > rest) {
+                fa = fa + s.stiffness * (d - rest) / d * gap;
+                ha = ha + spring_hessian(s.stiffness, rest, gap, d);
+            }
+        }
+        var share = 1.0;
+        switch r % 4u {
+            case 0u: { share = 1.0; }
+            case 1u: { share = -(1.0 - w); }
+            default: { share = -w; }
+        }
+        *f = *f + share * fa;
+        *hs = *hs + (share * share) * ha;
+    }
+}
+// else seams
+fn add_seams(i: u32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {}
+// end seams
+
+// section body
+@group(0) @binding(16) var sdf: texture_2d<f32>;               // r32float, the body's SDF
+
+// Body contact inside the solve: a penalty ½k_c(thickness − φ)² where φ < thickness, with
+// Hessian k_c·n̂n̂ᵀ, at the body's pose at the end of the step. k_c is CONTACT_RATIO times the
+// mean diagonal of everything else acting on the vertex, so contact wins by that factor
+// whatever the fabric and step. Friction and the last clean-up are collide_body's, after.
+const CONTACT_RATIO: f32 = 100.0;
+
+fn add_contact(xi: vec3<f32>, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {
+    let d = xi - step.body_translation.xyz;
+    let xb = vec3<f32>(dot(step.body_x.xyz, d), dot(step.body_y.xyz, d), dot(step.body_z.xyz, d));
+    let s = sdf_sample(sdf, params.sdf_origin, params.sdf_dims, xb);
+    if (s.w >= params.thickness) {
+        return;
+    }
+    let n = safe_normalize(step.body_x.xyz * s.x + step.body_y.xyz * s.y + step.body_z.xyz * s.z);
+    let h = *hs;
+    let k_c = CONTACT_RATIO * (h[0].x + h[1].y + h[2].z) / 3.0;
+    *f = *f + k_c * (params.thickness - s.w) * n;
+    *hs = *hs + k_c * outer(n, n);
+}
+// else body
+fn add_contact(xi: vec3<f32>, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {}
+// end body
+
+// H⁻¹f through the adjugate: its rows are cross products of H's columns.
+fn solve3(hs: mat3x3<f32>, f: vec3<f32>) -> vec3<f32> {
+    let r0 = cross(hs[1], hs[2]);
+    let r1 = cross(hs[2], hs[0]);
+    let r2 = cross(hs[0], hs[1]);
+    let det = dot(hs[0], r0);
+    if (abs(det) < 1e-30) {
+        return vec3<f32>(0.0);
+    }
+    return vec3<f32>(dot(r0, f), dot(r1, f), dot(r2, f)) / det;
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let k = particle_index(gid, groups);
+    if (k >= sweep.count) {
+        return;
+    }
+    let i = textureLoad(order, texel(sweep.first + k), 0).x;
+    let prev = textureLoad(pos, texel(i), 0);
+    if (prev.w == 0.0) {
+        return;
+    }
+    let h = params.dt;
+    let mass = 1.0 / prev.w;
+    let xi = x[i].xyz;
+    let inertia = mass / (h * h);
+    let air = params.air_damping * mass / h;
+    var f = -inertia * (xi - y[i].xyz) - air * moved(i);
+    var hs = diagonal(inertia + air);
+    add_springs(i, xi, &f, &hs);
+    add_bending(i, &f, &hs);
+    add_seams(i, &f, &hs);
+    add_contact(xi, &f, &hs);
+    if ((sweep.flags & 2u) != 0u) {
+        // The last sweep records the unbalanced force against the vertex's weight.
+        let g = length(params.gravity.xyz);
+        let weight = mass * select(STANDARD_GRAVITY, g, g > 0.0);
+        residual[i] = vec2<f32>(weight * weight, dot(f, f));
+    }
+    x[i] = vec4<f32>(xi + solve3(hs, f), prev.w);
+}

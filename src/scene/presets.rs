@@ -1,0 +1,287 @@
+//! Named fabric presets for `[fabric] preset = "..."`: areal density, stretch and bending
+//! stiffness, and damping for seven garment fabrics, from published measurements where they
+//! exist. README.md ("Fabric presets") lists the sources and says which values are proxies. A
+//! key written next to `preset` in `[fabric]` overrides that preset's value.
+//!
+//! Conventions, shared by every row:
+//! - Stretch is the small-strain (zero-strain sample) uniaxial stiffness with the lateral edges
+//!   free, k = k0 − k1²/k2: the quantity the model's Y is (edge springs Y·ΣA/L² on an
+//!   equilateral mesh give a uniaxial stiffness of Y). The model is isotropic, so the two
+//!   material axes are combined by their geometric mean √(k_u·k_v), which is the same factor from
+//!   each axis; the weaker axis alone would make denim 2.2× softer than this. The Wang et al.
+//!   2011 ("W11") files store half the stiffness: k0 = 2·json[0][0], k1 = 2·json[0][1],
+//!   k2 = 2·json[0][2].
+//! - Bending is the continuum rigidity B (moment per unit width per unit curvature). For W11 it
+//!   is B = ke/4 from the lowest-curvature hinge sample, and the geometric mean of the 0° and 90°
+//!   hinge rows. For the Feng et al. 2022 class medians it is the geometric mean of warp and weft.
+//! - Damping has no measured source: 0.05 of critical everywhere, a modelling choice.
+//!
+//! Tags in the comments: [M] measured, [D] derived from [M], [2] secondhand, [P] proxy (real
+//! data, not this fabric), [low] engine or vendor page.
+
+/// A named fabric with values from published measurements (see README.md, "Fabric presets").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FabricPreset {
+    /// The name used in `[fabric] preset`.
+    pub name: &'static str,
+    /// Areal density in kg/m².
+    pub density_kg_m2: f64,
+    /// Membrane stretch stiffness in N/m.
+    pub stretch_stiffness_n_m: f64,
+    /// Bending rigidity in N·m.
+    pub bending_stiffness_n_m: f64,
+    /// Spring damping as a fraction of critical.
+    pub damping_ratio: f64,
+    /// Where the values come from, in one line.
+    pub source: &'static str,
+}
+
+/// Every preset, in the order the README lists them.
+pub const PRESETS: &[FabricPreset] = &[
+    FabricPreset {
+        name: "cotton",
+        // 220 g/m² / 1000 = 0.220 kg/m². W11 royal-target, a 65/35 cotton/PES pants woven [M];
+        // used as a proxy for shirting, which no source measured (shirting is lighter).
+        density_kg_m2: 0.220,
+        // u: 2·2016.55 = 4033.1, v: 2·2034.98 = 4069.9, k1 = 18.3; lateral-free 4033.0 / 4069.9;
+        // √(4033.0·4069.9) = 4051 N/m [D]. Probably the W11 rig's ceiling: a lower bound.
+        stretch_stiffness_n_m: 4.05e3,
+        // ke 0° = 90° = 125.41e-6; √(125.41e-6·125.41e-6) / 4 = 3.135e-5 N·m [D].
+        bending_stiffness_n_m: 3.14e-5,
+        // Modelling choice: no measured source.
+        damping_ratio: 0.05,
+        source: "W11 royal-target (65/35 cotton/PES woven), proxy for shirting [M/D]",
+    },
+    FabricPreset {
+        name: "denim",
+        // 324 g/m² / 1000 = 0.324 kg/m². W11 11oz-black-denim, 99/1 cotton/spandex [M].
+        density_kg_m2: 0.324,
+        // u: 2·205.35 = 410.7, v: 2·1013.89 = 2027.8, k1 = 20.5; lateral-free 410.5 / 2026.8;
+        // √(410.5·2026.8) = 912.1 N/m [D]. Crimp region; a KES secant at Fm is 4–25× stiffer.
+        stretch_stiffness_n_m: 912.0,
+        // ke 0° 64.196e-6, 90° 96.952e-6; √(64.196e-6·96.952e-6) / 4 = 1.972e-5 N·m [D].
+        // Cross-check: KES B 0.144–0.227 gf·cm²/cm × 9.80665e-5 = 1.41–2.23e-5 N·m [M→D].
+        bending_stiffness_n_m: 1.97e-5,
+        // Modelling choice: no measured source.
+        damping_ratio: 0.05,
+        source: "W11 11oz-black-denim [M/D]; bending agrees with KES denim [M→D]",
+    },
+    FabricPreset {
+        name: "silk",
+        // ≈60 g/m² / 1000 = 0.060 kg/m²: 14-momme crêpe de chine, 14 × 4.34 = 60.8 g/m² [low].
+        density_kg_m2: 0.060,
+        // "E·t ≈ 500 N/m", a solver-calibration note [2, weak]; no silk measurement found.
+        stretch_stiffness_n_m: 500.0,
+        // Median of Feng 2022 fabrics under 0.1 kg/m², 2.6e-6 N·m (IQR 1.3–5.1e-6) [P].
+        bending_stiffness_n_m: 2.6e-6,
+        // Modelling choice: no measured source.
+        damping_ratio: 0.05,
+        source: "density vendor [low]; stretch ppf note [2]; bending Feng 2022 < 0.1 kg/m² [P]",
+    },
+    FabricPreset {
+        name: "polyester",
+        // 128 g/m² / 1000 = 0.128 kg/m². W11 white-dots-on-blk, 100 % PES tablecloth [M].
+        density_kg_m2: 0.128,
+        // u: 2·2002.09 = 4004.2, v: 2·2027.49 = 4055.0, k1 = 0.69; lateral-free the same;
+        // √(4004.2·4055.0) = 4029 N/m [D]. Probably the W11 rig's ceiling: a lower bound.
+        stretch_stiffness_n_m: 4.03e3,
+        // ke 0° 51.714e-6, 90° 31.283e-6; √(51.714e-6·31.283e-6) / 4 = 1.006e-5 N·m [D].
+        bending_stiffness_n_m: 1.01e-5,
+        // Modelling choice: no measured source.
+        damping_ratio: 0.05,
+        source: "W11 white-dots-on-blk (100 % polyester tablecloth) [M/D]",
+    },
+    FabricPreset {
+        name: "jersey",
+        // 187 g/m² / 1000 = 0.187 kg/m². W11 gray-interlock, 60/40 cotton/PES T-shirt [M].
+        density_kg_m2: 0.187,
+        // u: 2·16.59 = 33.19, v: 2·34.48 = 68.95, k1 = −29.39; lateral-free
+        // 33.19 − 29.39²/68.95 = 20.66, 68.95 − 29.39²/33.19 = 42.92; √(20.66·42.92) = 29.8 [D].
+        // Stiffens steeply: 93 / 812 N/m at ≈17 % strain.
+        stretch_stiffness_n_m: 29.8,
+        // ke 0° 23.192e-6, 90° 14.268e-6; √(23.192e-6·14.268e-6) / 4 = 4.548e-6 N·m [D].
+        bending_stiffness_n_m: 4.55e-6,
+        // Modelling choice: no measured source.
+        damping_ratio: 0.05,
+        source: "W11 gray-interlock (60/40 cotton/PES knit) [M/D]",
+    },
+    FabricPreset {
+        name: "wool",
+        // No suiting weight in any source: 0.25 kg/m² is assumed, the centre of the Feng 2022
+        // 0.2–0.3 kg/m² class whose bending is used below. Melton coat cloth: 0.7 [low].
+        density_kg_m2: 0.25,
+        // "FAST/SiroFAST secant ≈3 000 N/m", a solver note; no primary table seen [2].
+        stretch_stiffness_n_m: 3.0e3,
+        // Feng 2022 fabrics of 0.2–0.3 kg/m²: medians warp 2.0e-5, weft 1.5e-5;
+        // √(2.0e-5·1.5e-5) = 1.732e-5 N·m [P].
+        bending_stiffness_n_m: 1.73e-5,
+        // Modelling choice: no measured source.
+        damping_ratio: 0.05,
+        source: "density assumed; stretch FAST note [2]; bending Feng 2022 0.2–0.3 kg/m² [P]",
+    },
+    FabricPreset {
+        name: "leather",
+        // Unreal Chaos Cloth "light leather 0.3" kg/m² [low]; garment sheep leather is
+        // 0.64–0.96 mm thick [M], but no measured areal density was found.
+        density_kg_m2: 0.30,
+        // E ≈ 77 MPa × t ≈ 0.75 mm: 77e6 Pa × 0.75e-3 m = 57 750 N/m [2] (ISO 3376, via ppf).
+        stretch_stiffness_n_m: 5.78e4,
+        // The measured rigidity (9.2–22) has no unit in the abstract, so it is unusable; the
+        // Feng 2022 0.2–0.3 kg/m² class is used: √(2.0e-5·1.5e-5) = 1.732e-5 N·m [P].
+        bending_stiffness_n_m: 1.73e-5,
+        // Modelling choice: no measured source.
+        damping_ratio: 0.05,
+        source: "density Unreal [low]; stretch Efendioglu via ppf [2]; bending Feng 2022 [P]",
+    },
+];
+
+/// The preset of this name, if any.
+pub fn preset(name: &str) -> Option<&'static FabricPreset> {
+    PRESETS.iter().find(|p| p.name == name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GRAVITY: f64 = 9.80665;
+
+    fn get(name: &str) -> &'static FabricPreset {
+        preset(name).unwrap_or_else(|| panic!("no preset {name}"))
+    }
+
+    fn close(a: f64, b: f64, rel: f64) -> bool {
+        (a - b).abs() <= rel * b.abs()
+    }
+
+    #[test]
+    fn names_are_unique_in_readme_order_and_found() {
+        let names: Vec<_> = PRESETS.iter().map(|p| p.name).collect();
+        let order = [
+            "cotton",
+            "denim",
+            "silk",
+            "polyester",
+            "jersey",
+            "wool",
+            "leather",
+        ];
+        assert_eq!(names, order);
+        for p in PRESETS {
+            assert_eq!(preset(p.name), Some(p));
+        }
+        assert_eq!(preset("linen"), None);
+        assert_eq!(preset("Denim"), None);
+    }
+
+    #[test]
+    fn every_value_is_finite_and_positive_and_sourced() {
+        for p in PRESETS {
+            for v in [
+                p.density_kg_m2,
+                p.stretch_stiffness_n_m,
+                p.bending_stiffness_n_m,
+                p.damping_ratio,
+            ] {
+                assert!(v.is_finite() && v > 0.0, "{}: {v}", p.name);
+            }
+            assert!(p.damping_ratio < 1.0, "{}", p.name);
+            assert!(!p.source.is_empty(), "{}", p.name);
+            assert!(!p.source.contains('\n'), "{}", p.name);
+        }
+    }
+
+    #[test]
+    fn damping_is_the_modelling_default_everywhere() {
+        assert!(PRESETS.iter().all(|p| p.damping_ratio == 0.05));
+    }
+
+    #[test]
+    fn wovens_are_at_least_ten_times_stiffer_than_the_knit() {
+        let knit = get("jersey").stretch_stiffness_n_m;
+        for name in ["cotton", "denim", "polyester"] {
+            let k = get(name).stretch_stiffness_n_m;
+            assert!(k >= 10.0 * knit, "{name}: {k} vs jersey {knit}");
+        }
+        // Woven cotton in the thousands of N/m, the knit in the tens to hundreds.
+        assert!(get("cotton").stretch_stiffness_n_m >= 1.0e3);
+        assert!((10.0..1.0e3).contains(&knit));
+    }
+
+    #[test]
+    fn w11_conversions_reproduce_the_presets() {
+        // Zero-strain stretching row [k0, k1, k2, k3] / 2 and the first bending column for the
+        // 0° and 90° hinges, as printed in the W11 material files.
+        let rows: [(&str, [f64; 3], [f64; 2]); 4] = [
+            (
+                "cotton",
+                [2016.55456, 9.170511, 2034.97644],
+                [125.409805e-6, 125.409805e-6],
+            ),
+            (
+                "denim",
+                [205.352005, 10.234077, 1013.88629],
+                [64.196457e-6, 96.951576e-6],
+            ),
+            (
+                "polyester",
+                [2002.08618, 0.345588, 2027.48559],
+                [51.713814e-6, 31.282822e-6],
+            ),
+            (
+                "jersey",
+                [16.593832, -14.695990, 34.477123],
+                [23.191698e-6, 14.267624e-6],
+            ),
+        ];
+        for (name, [h0, h1, h2], [ke0, ke90]) in rows {
+            let (k0, k1, k2) = (2.0 * h0, 2.0 * h1, 2.0 * h2);
+            let free_u = k0 - k1 * k1 / k2;
+            let free_v = k2 - k1 * k1 / k0;
+            let p = get(name);
+            let k = (free_u * free_v).sqrt();
+            assert!(close(p.stretch_stiffness_n_m, k, 0.005), "{name}: {k}");
+            let b = (ke0 * ke90).sqrt() / 4.0;
+            assert!(close(p.bending_stiffness_n_m, b, 0.005), "{name}: {b}");
+        }
+        // The W11 files give areal density in kg/m²: 220, 324, 128 and 187 g/m² / 1000.
+        let densities = [
+            ("cotton", 220.0),
+            ("denim", 324.0),
+            ("polyester", 128.0),
+            ("jersey", 187.0),
+        ];
+        for (name, g_m2) in densities {
+            assert_eq!(get(name).density_kg_m2, g_m2 / 1000.0, "{name}");
+        }
+    }
+
+    #[test]
+    fn gf_cm_conversion_and_the_kes_denim_cross_check() {
+        // 1 gf·cm²/cm: 9.80665e-3 N × 1e-4 m² / 1e-2 m.
+        let gf = GRAVITY * 1e-3;
+        let gf_cm = gf * 1e-4 / 1e-2;
+        assert!(close(gf_cm, 9.80665e-5, 1e-12), "{gf_cm}");
+        // The W11 denim bending lies inside the KES range of six denims, 0.144–0.227 gf·cm.
+        let b = get("denim").bending_stiffness_n_m;
+        assert!((0.144 * gf_cm..=0.227 * gf_cm).contains(&b), "{b}");
+    }
+
+    #[test]
+    fn other_unit_conversions() {
+        // 14 momme × 4.34 g/m² per momme = 60.76 g/m², quoted as about 60 g/m².
+        assert!(close(get("silk").density_kg_m2, 14.0 * 4.34 / 1000.0, 0.02));
+        // E·t: 77 MPa × 0.75 mm = 57 750 N/m.
+        let e_t = 77e6 * 0.75e-3;
+        assert!(close(get("leather").stretch_stiffness_n_m, e_t, 0.005));
+    }
+
+    #[test]
+    fn bending_lengths_are_in_the_measured_range() {
+        // Bending length c = (B / (ρ_A g))^(1/3); Feng 2022's 618 fabrics span 0.7–3.9 cm.
+        for p in PRESETS {
+            let c = (p.bending_stiffness_n_m / (p.density_kg_m2 * GRAVITY)).cbrt();
+            assert!((0.007..=0.039).contains(&c), "{}: c = {c} m", p.name);
+        }
+    }
+}
