@@ -12,6 +12,7 @@
 
 pub mod atomic_file;
 pub mod bench;
+pub mod bench_integrators;
 pub mod body;
 pub mod check;
 pub mod cpu;

@@ -63,6 +63,13 @@ enum Command {
         /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
         #[arg(long, default_value = "auto")]
         adapter: AdapterChoice,
+        /// Instead of the grid sizes: run this scene under symplectic and implicit Euler on both
+        /// backends and write integrators.csv and integrators.md.
+        #[arg(long)]
+        scene: Option<PathBuf>,
+        /// With --scene: output frames per point (default: the scene's).
+        #[arg(long)]
+        frames: Option<u32>,
     },
 }
 
@@ -168,11 +175,19 @@ fn execute(command: Command) -> Result<(), Error> {
             Ok(())
         }
         Command::Bench {
+            scene: Some(scene),
+            frames,
+            out,
+            adapter,
+            ..
+        } => drapekit::bench_integrators::run_cli(&scene, frames, &out, &adapter).map(|_| ()),
+        Command::Bench {
             sizes,
             substeps,
             repeats,
             out,
             adapter,
+            ..
         } => drapekit::bench::run_cli(&sizes, substeps, repeats, &out, &adapter),
     }
 }

@@ -24,6 +24,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("run", 8),
     ("output", 8),
     ("bench", 8),
+    ("bench_integrators", 8),
     ("plot", 8),
 ];
 
