@@ -115,6 +115,27 @@ impl Checker<'_> {
         Ok(x)
     }
 
+    /// A finite `v` in [lo, hi] `unit`: the range where the value is physically sensible.
+    pub fn within(
+        &self,
+        table: &str,
+        key: &str,
+        v: f64,
+        (lo, hi): (f64, f64),
+        unit: &str,
+    ) -> Result<f32, InputError> {
+        let x = self.finite(table, key, v)?;
+        if !(lo..=hi).contains(&v) {
+            return Err(self.err(
+                table,
+                key,
+                format!("{v} {unit} is outside the sensible range {lo} to {hi} {unit}"),
+                format!("give a value from {lo} to {hi} {unit}"),
+            ));
+        }
+        Ok(x)
+    }
+
     /// A finite `v` ≥ 0 in `unit`.
     pub fn non_negative(
         &self,

@@ -38,6 +38,8 @@ pub struct Prepared {
     pub frames: u32,
     /// Wind, if any.
     pub wind: Option<Wind>,
+    /// The largest spring strain a frame may have before it counts as exploded.
+    pub max_strain: f32,
     /// Settle threshold on kinetic energy per free particle, in J.
     pub settle_ke_per_particle: Option<f32>,
     /// Things the user should know (e.g. a substep above the stable estimate).
@@ -254,6 +256,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         frames: s.frames,
         wind,
         settle_ke_per_particle: s.settle_ke_per_particle,
+        max_strain: s.max_strain,
         warnings,
         garment,
         seam_closed_gap,
@@ -397,11 +400,20 @@ pub fn simulate(
         if let Some(r) = solver.residual()? {
             stats.max_residual = Some(stats.max_residual.map_or(r, |m| m.max(r)));
         }
+        let strain = metrics::max_edge_strain(&state.positions, &prep.model.springs);
+        if strain > prep.max_strain {
+            return Err(Error::Unstable(format!(
+                "frame {frame}: a spring is stretched by {:.0}%, past solver.max_strain = {:.0}%: \
+                 the frame exploded and was not written. The substep ({:.3e} s) is too large for \
+                 the fabric's stiffness: use substeps = \"auto\", more substeps, or \
+                 integrator = \"implicit\"",
+                100.0 * strain,
+                100.0 * prep.max_strain,
+                prep.params.dt
+            )));
+        }
         stats.frames_run = frame;
-        stats.max_edge_strain = stats.max_edge_strain.max(metrics::max_edge_strain(
-            &state.positions,
-            &prep.model.springs,
-        ));
+        stats.max_edge_strain = stats.max_edge_strain.max(strain);
         stats.kinetic_energy_j = metrics::kinetic_energy(&prep.model, &state);
         stats.seam_gaps = seam_gaps(&state);
         if let Some(c) = &prep.model.collider {

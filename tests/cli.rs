@@ -133,13 +133,14 @@ fn a_scene_without_wind_builds_no_wind_pipeline_or_buffer() {
     assert!(solver.resource_labels().contains(&"triangles"));
 }
 
-#[test]
-fn a_non_finite_frame_stops_the_run_and_is_not_written() {
-    // The hanging cloth with 1 substep per frame is ~200× past its stable step and blows up.
+/// The hanging cloth with 1 substep per frame, ~200× past its stable step, with `extra` added
+/// to `[solver]`: it blows up. Returns the run's stderr and output folder after checking that
+/// it stopped with exit 3 and left every frame up to the last good one, and not the next.
+fn unstable_run(name: &str, extra: &str) -> (String, PathBuf) {
     let src = std::fs::read_to_string(common::fixture("scenes/hanging_cloth.toml"))
         .unwrap()
-        .replace("substeps = \"auto\"", "substeps = 1");
-    let dir = out_dir("nan");
+        .replace("substeps = \"auto\"", &format!("substeps = 1\n{extra}"));
+    let dir = out_dir(name);
     std::fs::create_dir_all(&dir).unwrap();
     let scene = dir.join("unstable.toml");
     std::fs::write(&scene, src).unwrap();
@@ -152,15 +153,10 @@ fn a_non_finite_frame_stops_the_run_and_is_not_written() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    let stderr = String::from_utf8_lossy(&r.stderr);
+    let stderr = String::from_utf8_lossy(&r.stderr).to_string();
     assert_eq!(r.status.code(), Some(3), "{stderr}");
-    assert!(
-        stderr.contains("non-finite") && stderr.contains("particle"),
-        "{stderr}"
-    );
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(summary["finite"], false);
     let last_good = summary["frames"].as_u64().unwrap();
     // Every frame up to the last good one is on disk; the bad one is not.
     for f in 0..=last_good {
@@ -170,6 +166,76 @@ fn a_non_finite_frame_stops_the_run_and_is_not_written() {
     assert!(frame_is_finite(
         &out.join(format!("frame_{last_good:04}.obj"))
     ));
+    (stderr, out)
+}
+
+#[test]
+fn an_exploded_frame_stops_the_run_and_is_not_written() {
+    // It passes solver.max_strain (500% by default) while still finite.
+    let (stderr, out) = unstable_run("exploded", "");
+    assert!(
+        stderr.contains("exploded") && stderr.contains("max_strain"),
+        "{stderr}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert!(summary["max_edge_strain"].as_f64().unwrap() <= 5.0);
+}
+
+/// A solver whose state turns NaN after its first advance.
+struct GoesNan(drapekit::cpu::CpuSolver, bool);
+
+impl drapekit::solver::Solver for GoesNan {
+    fn backend_name(&self) -> &'static str {
+        "cpu"
+    }
+    fn adapter(&self) -> Option<drapekit::solver::AdapterReport> {
+        None
+    }
+    fn advance(
+        &mut self,
+        steps: &[drapekit::model::layout::SubstepParams],
+    ) -> Result<(), drapekit::Error> {
+        self.1 = true;
+        self.0.advance(steps)
+    }
+    fn state(&mut self) -> Result<drapekit::solver::ParticleState, drapekit::Error> {
+        let mut s = self.0.state()?;
+        if self.1 {
+            s.positions[7].y = f32::NAN;
+        }
+        Ok(s)
+    }
+    fn set_state(&mut self, state: &drapekit::solver::ParticleState) {
+        self.0.set_state(state)
+    }
+    fn set_params(&mut self, params: &drapekit::model::layout::SimParams) {
+        self.0.set_params(params)
+    }
+}
+
+#[test]
+fn a_non_finite_frame_stops_the_run_and_is_not_used() {
+    let prep =
+        prepare(&Scene::load(&common::fixture("scenes/hanging_cloth.toml")).unwrap()).unwrap();
+    let mut solver = GoesNan(
+        drapekit::cpu::CpuSolver::new(&prep.model, prep.params, &prep.plan),
+        false,
+    );
+    let mut stats = drapekit::sim::RunStats::default();
+    let mut seen = Vec::new();
+    let err = drapekit::sim::simulate(&prep, &mut solver, &mut stats, |f, _| {
+        seen.push(f);
+        Ok(())
+    })
+    .unwrap_err();
+    assert_eq!(seen, vec![0], "only the initial frame was handed on");
+    assert!(!stats.finite);
+    let msg = err.to_string();
+    assert!(
+        msg.contains("non-finite") && msg.contains("particle 7"),
+        "{msg}"
+    );
 }
 
 fn frame_is_finite(path: &Path) -> bool {

@@ -246,6 +246,13 @@ impl Pattern {
                     "map panel names to panels",
                 )
             })?;
+        if panel_map.is_empty() {
+            return Err(r.err(
+                "pattern.panels",
+                "has no panels: there is no cloth to simulate",
+                "add at least one panel",
+            ));
+        }
         let mut panels = Vec::new();
         for (name, p) in panel_map {
             panels.push(read_panel(&r, name, p, relative)?);

@@ -257,8 +257,11 @@ pub(super) fn parse(c: &Checker, base: &Path, b: &RawBody) -> Result<BodySetting
         }
         Ok(x)
     };
-    let thickness = c.positive(t, "thickness_m", b.thickness_m, "m")?;
-    let resolution = c.positive(t, "sdf_resolution_m", b.sdf_resolution_m, "m")?;
+    // A collision shell thinner than 10 µm is below f32 resolution at body scale; thicker than
+    // 10 cm is no longer cloth touching a body. SDF cells finer than 0.1 mm cost gigabytes for
+    // a body; coarser than 0.5 m cannot resolve one.
+    let thickness = c.within(t, "thickness_m", b.thickness_m, (1e-5, 0.1), "m")?;
+    let resolution = c.within(t, "sdf_resolution_m", b.sdf_resolution_m, (1e-4, 0.5), "m")?;
     let mut keys = Vec::new();
     for (k, kf) in b.keyframes.iter().enumerate() {
         let table = format!("body.keyframes[{k}]");
@@ -310,7 +313,7 @@ pub(super) fn parse(c: &Checker, base: &Path, b: &RawBody) -> Result<BodySetting
         source,
         sdf_resolution: resolution,
         sdf_margin: match b.sdf_margin_m {
-            Some(m) => c.positive(t, "sdf_margin_m", m, "m")?,
+            Some(m) => c.within(t, "sdf_margin_m", m, (1e-5, 1.0), "m")?,
             // Room for the thickness and the trilinear stencil around the surface.
             None => (2.0 * thickness).max(3.0 * resolution),
         },

@@ -108,10 +108,13 @@ pub(super) fn parse(
             ClothSource::Pattern {
                 path: base.join(&p.path),
                 options: GarmentOptions {
-                    particle_distance: c.positive(
+                    // Below 1 mm a garment has tens of millions of particles; above 0.5 m
+                    // no panel has an interior.
+                    particle_distance: c.within(
                         t,
                         "particle_distance_m",
                         p.particle_distance_m,
+                        (1e-3, 0.5),
                         "m",
                     )? as f64,
                     placement,

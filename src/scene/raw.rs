@@ -197,6 +197,8 @@ pub(super) struct RawSolver {
     pub(super) settle_ke_per_particle_j: Option<f64>,
     #[serde(default = "default_max_substeps")]
     pub(super) max_substeps_per_frame: i64,
+    #[serde(default = "default_max_strain")]
+    pub(super) max_strain: f64,
 }
 
 fn default_fps() -> f64 {
@@ -209,6 +211,11 @@ fn default_iterations() -> i64 {
 
 /// The default of `[solver] iterations`.
 pub(super) const DEFAULT_ITERATIONS: i64 = 10;
+
+/// A frame with a spring stretched past 500% is an exploded frame.
+fn default_max_strain() -> f64 {
+    5.0
+}
 
 fn default_integrator() -> String {
     "symplectic".into()

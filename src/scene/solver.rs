@@ -29,6 +29,8 @@ pub struct SolverSettings {
     pub settle_ke_per_particle: Option<f32>,
     /// The most substeps per frame `auto` may choose before the scene is refused.
     pub max_substeps_per_frame: u32,
+    /// A frame with any spring strain above this is exploded: the run stops before writing it.
+    pub max_strain: f32,
 }
 
 /// Output settings.
@@ -86,6 +88,7 @@ pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings,
             s.max_substeps_per_frame,
             1,
         )?,
+        max_strain: c.positive("solver", "max_strain", s.max_strain, "(a strain: 1 = 100%)")?,
     })
 }
 
