@@ -25,6 +25,7 @@ pub mod output;
 pub mod pattern;
 pub mod plan;
 pub mod plot;
+pub mod preview;
 pub mod run;
 pub mod scene;
 pub mod sim;

@@ -38,6 +38,29 @@ enum Command {
         #[arg(long)]
         frames: Option<u32>,
     },
+    /// Render one frame of a finished run (the garment and the body) to a PNG.
+    Preview {
+        /// The run's output folder (frame_NNNN.obj and summary.json).
+        run: PathBuf,
+        /// The frame (default: the last one written).
+        #[arg(long)]
+        frame: Option<u32>,
+        /// front, back, side or three-quarter.
+        #[arg(long, default_value = "three-quarter")]
+        camera: drapekit::preview::CameraPreset,
+        /// fabric, or strain (each triangle's stretch against frame 0, blue 0% to red 20%).
+        #[arg(long, default_value = "fabric")]
+        mode: drapekit::preview::ColorMode,
+        /// Image size, WIDTHxHEIGHT in pixels.
+        #[arg(long, default_value = "1280x960", value_parser = parse_size)]
+        size: (u32, u32),
+        /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
+        #[arg(long, default_value = "auto")]
+        adapter: AdapterChoice,
+        /// The PNG to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Print the pass plan a scene compiles to.
     Plan {
         /// The scene file (TOML).
@@ -71,6 +94,24 @@ enum Command {
         #[arg(long)]
         frames: Option<u32>,
     },
+}
+
+/// "1280x960" → (1280, 960); each side from 16 to 3840 px (4K UHD is 3840×2160).
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once('x')
+        .ok_or_else(|| format!("{s:?} is not WIDTHxHEIGHT, e.g. 1280x960"))?;
+    let side = |v: &str| -> Result<u32, String> {
+        let n: u32 = v
+            .parse()
+            .map_err(|_| format!("{v:?} is not a whole number"))?;
+        if (16..=3840).contains(&n) {
+            Ok(n)
+        } else {
+            Err(format!("{n} px is outside 16 to 3840"))
+        }
+    };
+    Ok((side(w)?, side(h)?))
 }
 
 fn main() -> ExitCode {
@@ -172,6 +213,26 @@ fn execute(command: Command) -> Result<(), Error> {
                     );
                 }
             }
+            Ok(())
+        }
+        Command::Preview {
+            run,
+            frame,
+            camera,
+            mode,
+            size,
+            adapter,
+            out,
+        } => {
+            let options = drapekit::preview::PreviewOptions {
+                frame,
+                camera,
+                mode,
+                size,
+                adapter,
+            };
+            drapekit::preview::preview_run(&run, &options, &out)?;
+            println!("wrote {}", out.display());
             Ok(())
         }
         Command::Bench {

@@ -8,7 +8,6 @@
 
 use super::bending_forces::hinge_geometry;
 use super::seam_forces::rest_gap;
-use crate::body::sdf::sdf_sample;
 use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep, SWEEP_LAST};
 use glam::{Mat3, Vec2, Vec3, Vec4};
 
@@ -20,13 +19,7 @@ pub struct VbdElements<'a> {
     pub hinges: Option<(&'a [u32], &'a [u32], &'a [Hinge])>,
     /// Seam offsets, seam refs (index · 4 + role) and seam pairs, when the cloth is sewn.
     pub seams: Option<(&'a [u32], &'a [u32], &'a [Seam])>,
-    /// The body's SDF values (grid in `SimParams`), when the scene has a body.
-    pub sdf: Option<&'a [f32]>,
 }
-
-/// Contact is this many times stiffer than the mean diagonal of everything else acting on the
-/// vertex, whatever the fabric and step (as `CONTACT_RATIO` in the kernel).
-pub const CONTACT_RATIO: f32 = 100.0;
 
 fn outer(a: Vec3, b: Vec3) -> Mat3 {
     Mat3::from_cols(a * b.x, a * b.y, a * b.z)
@@ -51,10 +44,10 @@ fn spring_hessian(k: f32, rest: f32, d: Vec3, len: f32) -> Mat3 {
 /// - hinges: the explicit bending force, Hessian ½cos(θ/2)·weight·uuᵀ (Gauss–Newton: the
 ///   derivative of sin(θ/2) times the outer product of the angle's direction; PSD);
 /// - seam pairs: zero-rest (or shrinking-rest, pull-only) springs to the partner point, the
-///   partner's ends taking −(1 − w) and −w of the force and (1 − w)² and w² of the Hessian;
-/// - body contact: ½k_c(thickness − φ)² where φ < thickness (φ from the SDF at the body's pose
-///   at the end of the step), Hessian k_c·n̂n̂ᵀ, k_c = `CONTACT_RATIO` × the mean diagonal of
-///   the rest. Friction is left to `collide_body`, which runs after the step.
+///   partner's ends taking −(1 − w) and −w of the force and (1 − w)² and w² of the Hessian.
+///
+/// Body contact is not in the solve: `collide_body` projects and applies friction after the
+/// step (README.md, "Implicit Euler", says why).
 #[allow(clippy::too_many_arguments)] // the kernel's inputs, one argument each
 pub fn vertex_system(
     params: &SimParams,
@@ -135,23 +128,6 @@ pub fn vertex_system(
         }
     }
 
-    if let Some(sdf) = el.sdf {
-        let v3 = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
-        let (bx, by, bz) = (v3(step.body_x), v3(step.body_y), v3(step.body_z));
-        let d = xi - v3(step.body_translation);
-        let xb = Vec3::new(bx.dot(d), by.dot(d), bz.dot(d));
-        let o = params.sdf_origin;
-        let dims = [params.sdf_dims[0], params.sdf_dims[1], params.sdf_dims[2]];
-        let s = sdf_sample(sdf, dims, Vec3::new(o[0], o[1], o[2]), o[3], xb);
-        if s.w < params.thickness {
-            let g = bx * s.x + by * s.y + bz * s.z;
-            let len = g.length();
-            let n = if len > 1e-12 { g / len } else { Vec3::ZERO };
-            let k_c = CONTACT_RATIO * (hess.x_axis.x + hess.y_axis.y + hess.z_axis.z) / 3.0;
-            f += k_c * (params.thickness - s.w) * n;
-            hess += k_c * outer(n, n);
-        }
-    }
     (f, hess)
 }
 

@@ -16,7 +16,7 @@ use std::path::PathBuf;
 const SHAPE_RINGS: u32 = 48;
 
 /// The body's triangles, checked.
-fn build_body(settings: &BodySettings, c: &Checker) -> Result<Body, InputError> {
+pub fn build_body(settings: &BodySettings, c: &Checker) -> Result<Body, InputError> {
     let mesh = match &settings.source {
         BodySource::Mesh {
             path,

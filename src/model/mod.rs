@@ -8,6 +8,7 @@ mod coloring;
 pub mod layout;
 
 pub use build::BuiltCloth;
+pub use collider::build_body;
 pub use coloring::Coloring;
 
 use crate::mesh::TriMesh;
