@@ -137,10 +137,11 @@ pub fn triangle_strain(rest: &[Vec3], now: &[Vec3], triangles: &[[u32; 3]]) -> V
             let f2 = (d2 - f1 * x2) / y2;
             // Singular values of the 3×2 F from its 2×2 Gram matrix FᵀF.
             let (g11, g12, g22) = (f1.dot(f1), f1.dot(f2), f2.dot(f2));
-            let tr = g11 + g22;
-            let det = g11 * g22 - g12 * g12;
-            let disc = (0.25 * tr * tr - det).max(0.0).sqrt();
-            (0.5 * tr + disc).max(0.0).sqrt() - 1.0
+            // The larger eigenvalue (g11 + g22)/2 + √(((g11 − g22)/2)² + g12²), written without
+            // the cancellation of √(tr²/4 − det) near the identity.
+            let half_diff = 0.5 * (g11 - g22);
+            let disc = (half_diff * half_diff + g12 * g12).sqrt();
+            (0.5 * (g11 + g22) + disc).sqrt() - 1.0
         })
         .collect()
 }
