@@ -6,6 +6,7 @@ use crate::error::Error;
 use crate::gpu::{AdapterChoice, GpuContext, GpuSolver};
 use crate::model::layout::{INTEGRATOR_EXPLICIT, INTEGRATOR_IMPLICIT};
 use crate::output::{obj_text, Summary};
+use crate::preview::{render_frame, PreviewOptions};
 use crate::scene::Scene;
 use crate::sim::{prepare, simulate, Prepared, RunStats};
 use crate::solver::Solver;
@@ -140,6 +141,14 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
     if result.is_ok() && scene.output.obj && last % every != 0 {
         outputs.push(write_frame(last, &solver.state()?.positions)?);
     }
+    if result.is_ok() {
+        outputs.extend(write_previews(
+            &scene,
+            &opts.adapter,
+            &out_dir,
+            &mut warnings,
+        ));
+    }
     outputs.push("summary.json".to_string());
     let substeps_run = stats.frames_run as f64 * prep.substeps as f64;
     let summary = Summary {
@@ -217,4 +226,45 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
     write_atomic(&out_dir.join("summary.json"), json.as_bytes())?;
     result.map(|_| summary)
+}
+
+/// Renders the scene's `[output] previews` of the last frame as `preview_<mode>.png` and returns
+/// their names. A preview that cannot be rendered (no adapter at all) is a warning, not a
+/// failed run: the frames and the summary are the results.
+fn write_previews(
+    scene: &Scene,
+    adapter: &AdapterChoice,
+    out_dir: &std::path::Path,
+    warnings: &mut Vec<String>,
+) -> Vec<String> {
+    let mut names = Vec::new();
+    for mode in &scene.output.previews {
+        let options = PreviewOptions {
+            frame: None,
+            camera: scene
+                .output
+                .preview_camera
+                .parse()
+                .expect("validated at load"),
+            mode: mode.parse().expect("validated at load"),
+            size: (1280, 960),
+            adapter: adapter.clone(),
+        };
+        let name = format!("preview_{mode}.png");
+        match render_frame(
+            out_dir,
+            Some(scene),
+            scene.solver.fps,
+            &options,
+            &out_dir.join(&name),
+        ) {
+            Ok(()) => names.push(name),
+            Err(e) => {
+                let w = format!("preview {mode:?} not rendered: {e}");
+                eprintln!("drapekit: warning: {w}");
+                warnings.push(w);
+            }
+        }
+    }
+    names
 }

@@ -159,7 +159,8 @@ fn ramp(t: f32) -> Vec3 {
     }
 }
 
-/// Renders one frame of the run in `run` and writes it to `out` as a PNG (atomically).
+/// Renders one frame of the run in `run` (its `summary.json` names the scene) and writes it to
+/// `out` as a PNG (atomically).
 pub fn preview_run(run: &Path, options: &PreviewOptions, out: &Path) -> Result<(), Error> {
     let summary_path = run.join("summary.json");
     let summary: serde_json::Value = std::fs::read(&summary_path)
@@ -173,6 +174,23 @@ pub fn preview_run(run: &Path, options: &PreviewOptions, out: &Path) -> Result<(
                 )
             })
         })?;
+    let scene = match summary["scene"].as_str() {
+        Some(path) => Some(Scene::load(Path::new(path))?),
+        None => None,
+    };
+    let fps = summary["fps"].as_f64().unwrap_or(24.0) as f32;
+    render_frame(run, scene.as_ref(), fps, options, out)
+}
+
+/// Renders one frame of the run in `run`, with `scene`'s body (if any) at its pose at that
+/// frame, and writes it to `out` as a PNG (atomically).
+pub fn render_frame(
+    run: &Path,
+    scene: Option<&Scene>,
+    fps: f32,
+    options: &PreviewOptions,
+    out: &Path,
+) -> Result<(), Error> {
     let all = frames(run)?;
     let Some((first, first_path)) = all.first().cloned() else {
         return Err(bad(
@@ -237,11 +255,9 @@ pub fn preview_run(run: &Path, options: &PreviewOptions, out: &Path) -> Result<(
         |(lo, hi), p| (lo.min(*p), hi.max(*p)),
     );
     let mut meshes = vec![cloth];
-    if let Some(scene_path) = summary["scene"].as_str() {
-        let scene = Scene::load(Path::new(scene_path))?;
+    if let Some(scene) = scene {
         if let Some(settings) = &scene.body {
             let body = build_body(settings, &scene.checker())?;
-            let fps = summary["fps"].as_f64().unwrap_or(24.0) as f32;
             let pose = settings.motion.at(frame as f32 / fps);
             meshes.push(DrawMesh {
                 positions: (body.mesh.positions.iter())

@@ -232,6 +232,14 @@ pub(super) struct RawOutput {
     pub(super) obj: bool,
     #[serde(default = "default_every")]
     pub(super) every: i64,
+    #[serde(default)]
+    pub(super) previews: Vec<String>,
+    #[serde(default = "default_preview_camera")]
+    pub(super) preview_camera: String,
+}
+
+fn default_preview_camera() -> String {
+    "three-quarter".into()
 }
 
 impl Default for RawOutput {
@@ -240,6 +248,8 @@ impl Default for RawOutput {
             dir: None,
             obj: true,
             every: 1,
+            previews: Vec::new(),
+            preview_camera: default_preview_camera(),
         }
     }
 }

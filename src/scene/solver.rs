@@ -42,6 +42,10 @@ pub struct OutputSettings {
     pub obj: bool,
     /// Write every n-th frame.
     pub every: u32,
+    /// Preview modes rendered of the last frame (`"fabric"`, `"strain"`).
+    pub previews: Vec<String>,
+    /// The previews' camera preset.
+    pub preview_camera: String,
 }
 
 /// Validates `[solver]`.
@@ -107,5 +111,37 @@ pub(super) fn parse_output(
             .unwrap_or_else(|| Path::new("out").join(stem)),
         obj: raw.obj,
         every: c.count("output", "every", raw.every, 1)?,
+        previews: {
+            for mode in &raw.previews {
+                if !["fabric", "strain"].contains(&mode.as_str()) {
+                    return Err(c.err(
+                        "output",
+                        "previews",
+                        format!("unknown preview mode {mode:?}"),
+                        "use \"fabric\" and/or \"strain\"",
+                    ));
+                }
+            }
+            if !raw.previews.is_empty() && !raw.obj {
+                return Err(c.err(
+                    "output",
+                    "previews",
+                    "previews are rendered from the OBJ frames, and obj = false",
+                    "set obj = true, or remove previews",
+                ));
+            }
+            raw.previews.clone()
+        },
+        preview_camera: match raw.preview_camera.as_str() {
+            "front" | "back" | "side" | "three-quarter" => raw.preview_camera.clone(),
+            other => {
+                return Err(c.err(
+                    "output",
+                    "preview_camera",
+                    format!("unknown camera {other:?}"),
+                    "use front, back, side or three-quarter",
+                ))
+            }
+        },
     })
 }
