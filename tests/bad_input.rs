@@ -115,3 +115,43 @@ fn every_bad_pattern_is_refused_cleanly() {
     }
     assert!(checked >= 9, "only {checked} bad patterns found");
 }
+
+#[test]
+fn particle_estimates_are_close_for_the_shipped_garments() {
+    // The memory check refuses scenes from this estimate before building anything; it must be
+    // close to what is built. The pattern estimate counts panel area over the area of one
+    // equilateral-mesh particle, and the mesher keeps the outline's samples, so it may be off
+    // by the boundary's share: 20% bounds it at 2 cm and finer.
+    for scene in ["tshirt_drape_cotton.toml", "skirt_rotating.toml"] {
+        let mut scene =
+            drapekit::scene::Scene::load(&common::fixture(&format!("scenes/{scene}"))).unwrap();
+        scene.body = None;
+        let estimate = drapekit::model::budget::estimated_particles(&scene)
+            .unwrap()
+            .unwrap() as f64;
+        let built = scene.build_model().unwrap().model.len() as f64;
+        eprintln!("estimate {estimate}, built {built}");
+        assert!(
+            (estimate / built - 1.0).abs() < 0.2,
+            "{estimate} vs {built}"
+        );
+    }
+}
+
+#[test]
+fn an_oversized_grid_is_refused_in_well_under_a_second() {
+    let start = std::time::Instant::now();
+    let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .args([
+            "plan",
+            common::fixture("bad/grid_too_big.toml").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let elapsed = start.elapsed().as_secs_f64();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("max_memory_mb"));
+    // Process start and a TOML parse take milliseconds; building 64M particles would take
+    // minutes and tens of GB.
+    assert!(elapsed < 1.0, "took {elapsed} s");
+}

@@ -159,6 +159,7 @@ impl Scene {
 
     /// Builds the cloth model (mesh, fabric, pins and seams) and, for patterns, the garment.
     pub fn build_model(&self) -> Result<BuiltCloth, InputError> {
+        super::budget::check_budget(self)?;
         let garment = self.build_garment()?;
         let mesh = match &garment {
             Some(g) => g.mesh.clone(),

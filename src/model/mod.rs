@@ -2,6 +2,7 @@
 //! incidence lists that let each particle gather its forces without atomics, and the
 //! parameter structs both backends share (`layout`, mirrored by `kernels/common.wgsl`).
 
+pub mod budget;
 mod build;
 mod collider;
 mod coloring;

@@ -199,6 +199,7 @@ pub(super) struct RawSolver {
     pub(super) max_substeps_per_frame: i64,
     #[serde(default = "default_max_strain")]
     pub(super) max_strain: f64,
+    pub(super) max_memory_mb: Option<f64>,
 }
 
 fn default_fps() -> f64 {

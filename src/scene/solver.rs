@@ -31,6 +31,8 @@ pub struct SolverSettings {
     pub max_substeps_per_frame: u32,
     /// A frame with any spring strain above this is exploded: the run stops before writing it.
     pub max_strain: f32,
+    /// The most memory a run may plan for, in bytes (`None`: half the machine's memory).
+    pub max_memory_bytes: Option<u64>,
 }
 
 /// Output settings.
@@ -93,6 +95,12 @@ pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings,
             1,
         )?,
         max_strain: c.positive("solver", "max_strain", s.max_strain, "(a strain: 1 = 100%)")?,
+        max_memory_bytes: match s.max_memory_mb {
+            Some(mb) => {
+                Some((c.positive("solver", "max_memory_mb", mb, "MiB")? as f64 * 1048576.0) as u64)
+            }
+            None => None,
+        },
     })
 }
 
