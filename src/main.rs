@@ -37,7 +37,12 @@ enum Command {
         /// Override the number of output frames.
         #[arg(long)]
         frames: Option<u32>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
     },
+    /// List the GPU adapters, the one `--adapter auto` picks, and the CPU.
+    Info,
     /// Render one frame of a finished run (the garment and the body) to a PNG.
     Preview {
         /// The run's output folder (frame_NNNN.obj and summary.json).
@@ -133,6 +138,7 @@ fn execute(command: Command) -> Result<(), Error> {
             backend,
             adapter,
             frames,
+            quiet,
         } => {
             let scene = Scene::load(&scene)?;
             let opts = RunOptions {
@@ -140,6 +146,7 @@ fn execute(command: Command) -> Result<(), Error> {
                 adapter,
                 out_dir: out.clone(),
                 frames,
+                progress: !quiet,
             };
             let out_dir = out.unwrap_or_else(|| scene.output.dir.clone());
             let summary = run_scene(&scene, &opts)?;
@@ -168,6 +175,27 @@ fn execute(command: Command) -> Result<(), Error> {
                 summary.outputs.len(),
                 out_dir.display()
             );
+            Ok(())
+        }
+        Command::Info => {
+            let info = drapekit::gpu::adapters();
+            if info.adapters.is_empty() {
+                println!(
+                    "no GPU adapter (on Debian/Ubuntu, apt-get install -y mesa-vulkan-drivers \
+                     libvulkan1 gives the software one)"
+                );
+            }
+            for a in &info.adapters {
+                println!(
+                    "adapter: {} ({}, {}), driver {}",
+                    a.name, a.backend, a.device_type, a.driver
+                );
+            }
+            match &info.auto {
+                Some(a) => println!("--adapter auto picks: {} ({})", a.name, info.auto_reason),
+                None => println!("--adapter auto finds none: {}", info.auto_reason),
+            }
+            println!("cpu: {}", drapekit::bench::cpu_description());
             Ok(())
         }
         Command::Plan { scene, json } => {

@@ -47,6 +47,8 @@ pub struct RunOptions {
     pub out_dir: Option<PathBuf>,
     /// Overrides `[solver] frames`.
     pub frames: Option<u32>,
+    /// Show a progress bar on stderr (drawn only when stderr is a terminal).
+    pub progress: bool,
 }
 
 /// Creates the chosen backend; with `Auto`, falls back to the CPU and returns a note saying why.
@@ -128,12 +130,24 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
         )?;
         Ok(name)
     };
+    let bar = progress_bar(opts.progress, prep.frames);
+    let particle_substeps = prep.model.len() as f64 * prep.substeps as f64;
+    let started = std::time::Instant::now();
     let result = simulate(&prep, solver.as_mut(), &mut stats, |frame, state| {
         if scene.output.obj && frame % every == 0 {
             outputs.push(write_frame(frame, &state.positions)?);
         }
+        if frame > 0 {
+            let rate = particle_substeps * frame as f64 / started.elapsed().as_secs_f64();
+            bar.set_message(format!(
+                "{:.2} s simulated, {rate:.2e} particle-substeps/s",
+                frame as f32 * prep.frame_dt
+            ));
+            bar.set_position(frame as u64);
+        }
         Ok(())
     });
+    bar.finish_and_clear();
     // The last frame is the result: it is written also when the run ended between `every`
     // frames (the settle rule, or a frame count that is not a multiple). The solver still
     // holds its positions.
@@ -267,4 +281,18 @@ fn write_previews(
         }
     }
     names
+}
+
+/// A frame counter with simulated time, throughput and the time left, on stderr; hidden when
+/// `show` is off or stderr is not a terminal (indicatif draws nothing then).
+fn progress_bar(show: bool, frames: u32) -> indicatif::ProgressBar {
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(frames as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:30} frame {pos}/{len}  {msg}  eta {eta}")
+            .expect("a valid template"),
+    );
+    bar
 }

@@ -378,3 +378,17 @@ fn the_last_frame_is_written_between_output_frames() {
     }
     assert!(!out.join("frame_0007.obj").exists());
 }
+
+#[test]
+fn info_lists_the_adapters_and_the_cpu() {
+    let r = drapekit(&["info"]);
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(stdout.contains("cpu: "), "{stdout}");
+    if common::gpu().is_some() {
+        assert!(
+            stdout.contains("adapter: ") && stdout.contains("--adapter auto picks"),
+            "{stdout}"
+        );
+    }
+}

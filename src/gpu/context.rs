@@ -26,6 +26,47 @@ impl FromStr for AdapterChoice {
     }
 }
 
+/// What `drapekit info` reports.
+#[derive(Clone, Debug)]
+pub struct AdapterList {
+    /// Every adapter wgpu finds.
+    pub adapters: Vec<AdapterReport>,
+    /// The one `AdapterChoice::Auto` takes, if any.
+    pub auto: Option<AdapterReport>,
+    /// Why that one (or why none).
+    pub auto_reason: String,
+}
+
+/// The adapters on this machine and `auto`'s choice among them.
+pub fn adapters() -> AdapterList {
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()))
+        .iter()
+        .map(|a| report(&a.get_info()))
+        .collect();
+    let (auto, auto_reason) = match std::env::var("WGPU_ADAPTER_NAME") {
+        Ok(name) if !name.is_empty() => {
+            match GpuContext::new(&AdapterChoice::Named(name.clone())) {
+                Ok(ctx) => (Some(ctx.report()), format!("WGPU_ADAPTER_NAME={name}")),
+                Err(e) => (None, e.to_string()),
+            }
+        }
+        _ => match GpuContext::new(&AdapterChoice::Auto) {
+            Ok(ctx) => (
+                Some(ctx.report()),
+                "wgpu's high-performance choice".to_string(),
+            ),
+            Err(e) => (None, e.to_string()),
+        },
+    };
+    AdapterList {
+        adapters,
+        auto,
+        auto_reason,
+    }
+}
+
 /// A device and queue on a chosen adapter. Cheap to clone (wgpu handles are shared).
 #[derive(Clone, Debug)]
 pub struct GpuContext {
@@ -103,18 +144,23 @@ impl GpuContext {
 
     /// The adapter as reported in summaries and benchmarks.
     pub fn report(&self) -> AdapterReport {
-        AdapterReport {
-            name: self.info.name.clone(),
-            driver: self.info.driver.clone(),
-            backend: format!("{:?}", self.info.backend).to_lowercase(),
-            device_type: match self.info.device_type {
-                wgpu::DeviceType::Other => "other",
-                wgpu::DeviceType::IntegratedGpu => "integrated_gpu",
-                wgpu::DeviceType::DiscreteGpu => "discrete_gpu",
-                wgpu::DeviceType::VirtualGpu => "virtual_gpu",
-                wgpu::DeviceType::Cpu => "cpu",
-            }
-            .to_string(),
+        report(&self.info)
+    }
+}
+
+/// An adapter's name, driver, backend and type, as summaries and benchmarks print them.
+fn report(info: &wgpu::AdapterInfo) -> AdapterReport {
+    AdapterReport {
+        name: info.name.clone(),
+        driver: info.driver.clone(),
+        backend: format!("{:?}", info.backend).to_lowercase(),
+        device_type: match info.device_type {
+            wgpu::DeviceType::Other => "other",
+            wgpu::DeviceType::IntegratedGpu => "integrated_gpu",
+            wgpu::DeviceType::DiscreteGpu => "discrete_gpu",
+            wgpu::DeviceType::VirtualGpu => "virtual_gpu",
+            wgpu::DeviceType::Cpu => "cpu",
         }
+        .to_string(),
     }
 }

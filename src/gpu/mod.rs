@@ -8,6 +8,6 @@ mod readback;
 mod solver;
 mod texels;
 
-pub use context::{AdapterChoice, GpuContext};
+pub use context::{adapters, AdapterChoice, AdapterList, GpuContext};
 pub use readback::HashTables;
 pub use solver::GpuSolver;
