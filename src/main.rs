@@ -212,6 +212,7 @@ fn execute(command: Command) -> Result<(), Error> {
                 "substeps_source": if prep.auto_substeps { "auto" } else { "scene" },
                 "dt": prep.params.dt,
                 "stable_dt_estimate_s": prep.stable_dt,
+                "dt_limited_by": prep.dt_limited_by,
             });
             if json {
                 println!(

@@ -62,6 +62,8 @@ pub struct Summary {
     pub substeps_source: &'static str,
     /// Estimated largest stable substep in s.
     pub stable_dt_estimate_s: Option<f32>,
+    /// What set the substep: "scene", "stretch", "seam", "bending", "damping" or "body speed".
+    pub dt_limited_by: &'static str,
     /// Substep length in s.
     pub dt: f32,
     /// "explicit", "symplectic" or "implicit".

@@ -180,6 +180,7 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
         substeps_per_frame: prep.substeps,
         substeps_source: if prep.auto_substeps { "auto" } else { "scene" },
         stable_dt_estimate_s: prep.stable_dt,
+        dt_limited_by: prep.dt_limited_by,
         dt: prep.params.dt,
         integrator: match prep.params.integrator {
             INTEGRATOR_EXPLICIT => "explicit",

@@ -30,6 +30,9 @@ pub struct Prepared {
     pub substeps: u32,
     /// Whether `substeps` came from the stability estimate.
     pub auto_substeps: bool,
+    /// What set the substep: `"scene"`, `"stretch"`, `"seam"`, `"bending"`, `"damping"` or
+    /// `"body speed"`.
+    pub dt_limited_by: &'static str,
     /// Estimated largest stable substep in s (`None`: no stable step exists).
     pub stable_dt: Option<f32>,
     /// Output frame length in s.
@@ -105,10 +108,17 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     let frame_dt = 1.0 / s.fps;
     let implicit = s.integrator == INTEGRATOR_IMPLICIT;
     // Backward Euler is stable at any step: it has no bound to report or to obey.
-    let stable_dt = if implicit {
+    let stable_step = if implicit {
         None
     } else {
-        model.stable_dt(s.integrator, scene.air_damping)
+        model.stable_step(s.integrator, scene.air_damping)
+    };
+    let stable_dt = stable_step.map(|(dt, _)| dt);
+    // What sets the substep: the scene, or the stability bound's binding term (body speed
+    // below, if it asks for more).
+    let mut dt_limited_by = match (s.substeps, stable_step) {
+        (None, Some((_, term))) if !implicit => term,
+        _ => "scene",
     };
     let mut warnings = Vec::new();
     let (substeps, auto_substeps) = match s.substeps {
@@ -187,6 +197,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         if needed > substeps {
             if auto_substeps {
                 substeps = needed;
+                dt_limited_by = "body speed";
             } else {
                 warnings.push(format!(
                     "the body's surface moves up to {:.2e} m per substep, more than the                      thickness {thickness:.2e} m: particles may tunnel (use substeps = {needed} or \"auto\")",
@@ -251,6 +262,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         plan,
         substeps,
         auto_substeps,
+        dt_limited_by,
         stable_dt,
         frame_dt,
         frames: s.frames,

@@ -392,3 +392,19 @@ fn info_lists_the_adapters_and_the_cpu() {
         );
     }
 }
+
+#[test]
+fn plan_names_what_limits_the_substep() {
+    // The hanging cloth's fastest particle is held by its stretch springs; the sewn T-shirt's
+    // seams are twice as stiff as its fabric; an implicit scene's step is the scene's.
+    for (scene, term) in [
+        ("hanging_cloth.toml", "stretch"),
+        ("tshirt_sew.toml", "seam"),
+        ("tshirt_drape_cotton.toml", "scene"),
+    ] {
+        let path = common::fixture(&format!("scenes/{scene}"));
+        let r = drapekit(&["plan", path.to_str().unwrap(), "--json"]);
+        let plan: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+        assert_eq!(plan["dt_limited_by"], term, "{scene}");
+    }
+}

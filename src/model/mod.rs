@@ -263,12 +263,21 @@ impl ClothModel {
     /// Explicit Euler on a damped oscillator needs ω·dt < 2ζ with ζ = γ/(2ω), i.e.
     /// dt < γ/ω²; with no damping at all it has no stable step and `None` is returned.
     pub fn stable_dt(&self, integrator: u32, air_damping: f32) -> Option<f32> {
+        self.stable_step(integrator, air_damping).map(|(dt, _)| dt)
+    }
+
+    /// `stable_dt` and what sets it: `"stretch"`, `"seam"` or `"bending"` (the largest term of
+    /// the fastest particle's Gershgorin sum), or `"damping"` (the damping rate bound).
+    pub fn stable_step(&self, integrator: u32, air_damping: f32) -> Option<(f32, &'static str)> {
         let n = self.len();
         let mut k_sum = vec![0.0f32; n];
         let mut c_sum = vec![0.0f32; n];
+        // Each particle's sum split by source, to name the term that binds.
+        let mut parts = vec![[0.0f32; 3]; n];
         for s in &self.springs {
             for e in s.ends {
                 k_sum[e as usize] += s.stiffness;
+                parts[e as usize][0] += s.stiffness;
                 c_sum[e as usize] += s.damping;
             }
         }
@@ -278,6 +287,7 @@ impl ClothModel {
             let shares = [1.0, 1.0 - s.weight, s.weight];
             for (&v, share) in s.v.iter().zip(shares) {
                 k_sum[v as usize] += share * s.stiffness;
+                parts[v as usize][1] += share * s.stiffness;
                 c_sum[v as usize] += share * s.damping;
             }
         }
@@ -296,9 +306,11 @@ impl ClothModel {
             let k_hinge = 0.5 * h.stiffness * weight * grad_sq;
             for v in h.v {
                 k_sum[v as usize] += k_hinge;
+                parts[v as usize][2] += k_hinge;
             }
         }
         let mut omega_sq_max = 0.0f32;
+        let mut fastest = 0usize;
         let mut gamma_max = air_damping;
         let mut zeta_min = f32::INFINITY;
         for i in 0..n {
@@ -307,7 +319,10 @@ impl ClothModel {
             }
             let omega_sq = 2.0 * k_sum[i] / self.masses[i];
             let gamma = 2.0 * c_sum[i] / self.masses[i] + air_damping;
-            omega_sq_max = omega_sq_max.max(omega_sq);
+            if omega_sq > omega_sq_max {
+                omega_sq_max = omega_sq;
+                fastest = i;
+            }
             gamma_max = gamma_max.max(gamma);
             if omega_sq > 0.0 {
                 // ζ = γ / (2ω) of this particle's fastest mode.
@@ -319,19 +334,34 @@ impl ClothModel {
         } else {
             f32::INFINITY
         };
+        let p = parts[fastest];
+        let stiffest = if p[1] >= p[0] && p[1] >= p[2] {
+            "seam"
+        } else if p[2] > p[0] {
+            "bending"
+        } else {
+            "stretch"
+        };
+        let pick = |stiffness_bound: f32| {
+            if damping_bound < stiffness_bound {
+                (damping_bound, "damping")
+            } else {
+                (stiffness_bound, stiffest)
+            }
+        };
         if integrator == INTEGRATOR_EXPLICIT {
             if omega_sq_max == 0.0 {
-                return Some(damping_bound);
+                return Some((damping_bound, "damping"));
             }
             if zeta_min <= 0.0 {
                 return None;
             }
             let omega = omega_sq_max.sqrt();
-            Some((2.0 * zeta_min / omega).min(damping_bound))
+            Some(pick(2.0 * zeta_min / omega))
         } else if omega_sq_max == 0.0 {
-            Some(damping_bound)
+            Some((damping_bound, "damping"))
         } else {
-            Some((2.0 / omega_sq_max.sqrt()).min(damping_bound))
+            Some(pick(2.0 / omega_sq_max.sqrt()))
         }
     }
 }
