@@ -3,7 +3,7 @@
 // potential ½‖x − y‖²_M / h² + E(x) with its neighbours held fixed; vertices of one colour share
 // no element, so they never read each other's new position. Dispatched once per colour per
 // iteration, the sweep chosen by a dynamic offset. The bending and seam sections are composed in
-// only when the scene has hinges or seams. Body contact is collide_body's, after the step. CPU twin: src/cpu/vbd_solve.rs (energies and
+// only when the scene has hinges, seams or a body. CPU twin: src/cpu/vbd_solve.rs (energies and
 // Hessians documented there).
 
 @group(0) @binding(0) var<uniform> params: SimParams;
@@ -164,6 +164,42 @@ fn add_seams(i: u32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>
 fn add_seams(i: u32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {}
 // end seams
 
+// section body
+@group(0) @binding(16) var sdf: texture_2d<f32>;               // r32float, the body's SDF
+
+// Body contact inside the solve, at the body's pose at the end of the step (CPU twin documents
+// the choices): a penalty ½k_c(thickness − φ)² where φ < thickness with Hessian k_c·n̂n̂ᵀ, k_c
+// CONTACT_RATIO times the mean diagonal of everything else on the vertex; and Coulomb friction
+// lagged on the penalty's normal force λ, opposing the slip u over the step, smoothed below the
+// slip speed FRICTION_SLIP_SPEED: f = −μλ·u / max(|u|, FRICTION_SLIP_SPEED·h).
+const CONTACT_RATIO: f32 = 100.0;
+const FRICTION_SLIP_SPEED: f32 = 1.0;
+
+fn add_contact(i: u32, xi: vec3<f32>, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {
+    let d = xi - step.body_translation.xyz;
+    let xb = vec3<f32>(dot(step.body_x.xyz, d), dot(step.body_y.xyz, d), dot(step.body_z.xyz, d));
+    let s = sdf_sample(sdf, params.sdf_origin, params.sdf_dims, xb);
+    if (s.w >= params.thickness) {
+        return;
+    }
+    let n = safe_normalize(step.body_x.xyz * s.x + step.body_y.xyz * s.y + step.body_z.xyz * s.z);
+    let hm = *hs;
+    let k_c = CONTACT_RATIO * (hm[0].x + hm[1].y + hm[2].z) / 3.0;
+    let lambda = k_c * (params.thickness - s.w);
+    *f = *f + lambda * n;
+    *hs = *hs + k_c * outer(n, n);
+    let h = params.dt;
+    let v_body = step.body_velocity.xyz + cross(step.body_angular_velocity.xyz, d);
+    let slip = moved(i) - h * v_body;
+    let u = slip - dot(slip, n) * n;
+    let scale = params.friction * lambda / max(length(u), FRICTION_SLIP_SPEED * h);
+    *f = *f - scale * u;
+    *hs = *hs + scale * (diagonal(1.0) - outer(n, n));
+}
+// else body
+fn add_contact(i: u32, xi: vec3<f32>, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {}
+// end body
+
 // H⁻¹f through the adjugate: its rows are cross products of H's columns.
 fn solve3(hs: mat3x3<f32>, f: vec3<f32>) -> vec3<f32> {
     let r0 = cross(hs[1], hs[2]);
@@ -197,6 +233,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     add_springs(i, xi, &f, &hs);
     add_bending(i, &f, &hs);
     add_seams(i, &f, &hs);
+    add_contact(i, xi, &f, &hs);
     if ((sweep.flags & 2u) != 0u) {
         // The last sweep records the unbalanced force against the vertex's weight.
         let g = length(params.gravity.xyz);

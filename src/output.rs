@@ -85,6 +85,8 @@ pub struct Summary {
     pub passes: Vec<&'static str>,
     /// Largest spring strain at any output frame.
     pub max_edge_strain: f32,
+    /// Largest spring strain at the last frame (the result; sewing can strain more on the way).
+    pub last_frame_max_edge_strain: f32,
     /// Kinetic energy at the last good frame, in J.
     pub kinetic_energy_j: f64,
     /// Seams (stitches) in the pattern; 0 without one.

@@ -353,6 +353,8 @@ pub struct RunStats {
     pub body_contacts: usize,
     /// Largest relative residual of the implicit solve at any output frame.
     pub max_residual: Option<f32>,
+    /// Largest spring strain at the last good frame.
+    pub last_edge_strain: f32,
 }
 
 /// A particle rests on the body when it is within the collision thickness plus this of the
@@ -426,6 +428,7 @@ pub fn simulate(
         }
         stats.frames_run = frame;
         stats.max_edge_strain = stats.max_edge_strain.max(strain);
+        stats.last_edge_strain = strain;
         stats.kinetic_energy_j = metrics::kinetic_energy(&prep.model, &state);
         stats.seam_gaps = seam_gaps(&state);
         if let Some(c) = &prep.model.collider {

@@ -408,3 +408,38 @@ fn plan_names_what_limits_the_substep() {
         assert_eq!(plan["dt_limited_by"], term, "{scene}");
     }
 }
+
+#[test]
+fn tshirt_drape_cotton_sews_rests_and_stays_out_of_the_body() {
+    // Woven cotton at its measured stiffness, implicit Euler at one step per frame, run whole
+    // on the CPU path (about 2 s): sewn, then gravity, then the settle rule stops it.
+    let out = out_dir("tshirt_drape_cotton");
+    let r = drapekit(&[
+        "run",
+        common::fixture("scenes/tshirt_drape_cotton.toml")
+            .to_str()
+            .unwrap(),
+        "--backend",
+        "cpu",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let f = |key: &str| summary[key].as_f64().unwrap_or(f64::NAN);
+    assert_eq!(summary["integrator"], "implicit");
+    assert!(summary["settled"].is_object(), "not settled: {summary:#}");
+    assert_eq!(summary["seams_closed"], summary["seams"], "{summary:#}");
+    // The collision thickness is 3 mm; particles are measured against the exact mesh.
+    assert!(f("max_penetration_m") <= 0.003, "{summary:#}");
+    // At rest the largest stretch is 10% (one edge at the armpit; 99% of edges are under 5%,
+    // see README "Implicit Euler"): 15% flags a regression. The 5% target is not met yet.
+    assert!(f("last_frame_max_edge_strain") <= 0.15, "{summary:#}");
+    for name in ["preview_fabric.png", "preview_strain.png"] {
+        let path = out.join(name);
+        if common::gpu().is_some() {
+            assert!(path.is_file(), "{name} missing");
+        }
+    }
+}

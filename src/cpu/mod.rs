@@ -291,6 +291,7 @@ impl CpuSolver {
                         .seams
                         .as_ref()
                         .map(|(s, c)| (&c.offsets[..], &c.items[..], &s[..])),
+                    sdf: self.collider.as_ref().map(|c| &c.sdf.values[..]),
                 };
                 for sweep in &v.sweeps {
                     vbd_solve(

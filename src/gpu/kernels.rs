@@ -40,35 +40,36 @@ pub struct VbdEnergies {
     pub bending: bool,
     /// Seam pairs.
     pub seams: bool,
+    /// Body contact.
+    pub body: bool,
 }
 
 impl VbdEnergies {
     /// Every combination, for validation.
-    pub const ALL: [VbdEnergies; 4] = [
-        VbdEnergies {
+    pub const ALL: [VbdEnergies; 8] = {
+        let mut all = [VbdEnergies {
             bending: false,
             seams: false,
-        },
-        VbdEnergies {
-            bending: true,
-            seams: false,
-        },
-        VbdEnergies {
-            bending: false,
-            seams: true,
-        },
-        VbdEnergies {
-            bending: true,
-            seams: true,
-        },
-    ];
+            body: false,
+        }; 8];
+        let mut k = 0;
+        while k < 8 {
+            all[k] = VbdEnergies {
+                bending: k & 1 != 0,
+                seams: k & 2 != 0,
+                body: k & 4 != 0,
+            };
+            k += 1;
+        }
+        all
+    };
 }
 
 /// The complete WGSL source of a stage, with every optional section in. Stages that read the
 /// forces summed so far get `previous_force` from `input` (appended, so that line numbers in
 /// the stage file stay offset by `common.wgsl` only).
 pub fn compose(pass: Pass, input: ForceInput) -> String {
-    compose_with(pass, input, VbdEnergies::ALL[3])
+    compose_with(pass, input, VbdEnergies::ALL[7])
 }
 
 /// `compose`, keeping only the sections of the energies in `energies`. Dropped lines become
@@ -87,6 +88,7 @@ pub fn compose_with(pass: Pass, input: ForceInput, energies: VbdEnergies) -> Str
         let enabled = |name: &str| match name {
             "bending" => energies.bending,
             "seams" => energies.seams,
+            "body" => energies.body,
             _ => true,
         };
         let marker = if let Some(name) = t.strip_prefix("// section ") {

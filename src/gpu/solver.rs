@@ -203,6 +203,7 @@ impl GpuSolver {
         let energies = VbdEnergies {
             bending: !model.hinges.is_empty(),
             seams: !model.seams.is_empty(),
+            body: plan.contains(Pass::CollideBody),
         };
         let dispatch_for = |threads: u32| {
             let total = threads.div_ceil(WORKGROUP_SIZE).max(1);
@@ -296,6 +297,10 @@ impl GpuSolver {
                         add("seam_offsets", R32Uint, bytemuck::cast_slice(&csr.offsets))?;
                         add("seam_refs", R32Uint, bytemuck::cast_slice(&csr.items))?;
                         add("seams", Rgba32Uint, bytemuck::cast_slice(&model.seams))?;
+                    }
+                    if energies.body {
+                        let c = model.collider.as_ref().expect("contact needs a body");
+                        add("vbd_sdf", R32Float, bytemuck::cast_slice(&c.sdf.values))?;
                     }
                 }
                 Pass::VbdInit | Pass::VbdFinish | Pass::Integrate => {}
@@ -419,7 +424,11 @@ impl GpuSolver {
                             o(2),
                         ];
                         let mut next = 3;
-                        let sections = [(energies.bending, 3), (energies.seams, 3)];
+                        let sections = [
+                            (energies.bending, 3),
+                            (energies.seams, 3),
+                            (energies.body, 1),
+                        ];
                         for (on, count) in sections {
                             for _ in 0..count {
                                 list.push(if on { o(next) } else { Binding::Gap });
