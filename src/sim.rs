@@ -416,11 +416,16 @@ pub fn simulate(
         }
         let strain = metrics::max_edge_strain(&state.positions, &prep.model.springs);
         if strain > prep.max_strain {
+            let advice = if prep.colors.is_some() {
+                "the implicit solve did not hold the cloth together: use more substeps or \
+                 solver.iterations, or a longer seam_sewing_time_s"
+            } else {
+                "the substep is too large for the fabric's stiffness: use substeps = \"auto\", \
+                 more substeps, or integrator = \"implicit\""
+            };
             return Err(Error::Unstable(format!(
                 "frame {frame}: a spring is stretched by {:.0}%, past solver.max_strain = {:.0}%: \
-                 the frame exploded and was not written. The substep ({:.3e} s) is too large for \
-                 the fabric's stiffness: use substeps = \"auto\", more substeps, or \
-                 integrator = \"implicit\"",
+                 the frame exploded and was not written. At a substep of {:.3e} s, {advice}",
                 100.0 * strain,
                 100.0 * prep.max_strain,
                 prep.params.dt
