@@ -13,44 +13,13 @@ fn position(i: u32) -> vec3<f32> {
     return textureLoad(pos, texel(i), 0).xyz;
 }
 
-// Force on vertex `role` of hinge h. Roles 0, 1: the shared edge (x3, x4 in the paper);
-// roles 2, 3: the opposite vertices (x1, x2).
+// Force on vertex `role` of hinge h (hinge_terms in common.wgsl).
 fn hinge_force(h: Hinge, role: u32) -> vec3<f32> {
-    let x3 = position(h.v.x);
-    let x4 = position(h.v.y);
-    let x1 = position(h.v.z);
-    let x2 = position(h.v.w);
-    let e = x4 - x3;
-    let n1 = cross(x1 - x3, x1 - x4);
-    let n2 = cross(x2 - x4, x2 - x3);
-    let e_len = length(e);
-    let n1_sq = dot(n1, n1);
-    let n2_sq = dot(n2, n2);
-    // Degenerate triangles have no defined angle; they get no bending force.
-    if (e_len < 1e-12 || n1_sq < 1e-24 || n2_sq < 1e-24) {
+    let t = hinge_terms(h.stiffness, position(h.v.x), position(h.v.y), position(h.v.z), position(h.v.w), role);
+    if (!t.valid) {
         return vec3<f32>(0.0);
     }
-    let n1_len = sqrt(n1_sq);
-    let n2_len = sqrt(n2_sq);
-    let n1_hat = n1 / n1_len;
-    let n2_hat = n2 / n2_len;
-    let cos_theta = clamp(dot(n1_hat, n2_hat), -1.0, 1.0);
-    var sin_half = sqrt(max(0.0, 0.5 * (1.0 - cos_theta)));
-    if (dot(cross(n1_hat, n2_hat), e) < 0.0) {
-        sin_half = -sin_half;
-    }
-    let magnitude = h.stiffness * e_len * e_len / (n1_len + n2_len) * (sin_half - h.rest_sin_half);
-    let e_hat = e / e_len;
-    let a = n1 / n1_sq;
-    let b = n2 / n2_sq;
-    var u = vec3<f32>(0.0);
-    switch role {
-        case 0u: { u = dot(x1 - x4, e_hat) * a + dot(x2 - x4, e_hat) * b; }
-        case 1u: { u = -dot(x1 - x3, e_hat) * a - dot(x2 - x3, e_hat) * b; }
-        case 2u: { u = e_len * a; }
-        default: { u = e_len * b; }
-    }
-    return magnitude * u;
+    return t.weight * (t.sin_half - h.rest_sin_half) * t.u;
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)

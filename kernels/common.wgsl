@@ -127,6 +127,52 @@ fn safe_normalize(v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(0.0);
 }
 
+// The terms of a dihedral hinge's force on vertex `role` (Bridson, Marino & Fedkiw 2003): the
+// force is weight·(sin(θ/2) − sin(θ0/2))·u. Roles 0, 1: the shared edge x3, x4; roles 2, 3: the
+// opposite vertices x1, x2. A degenerate hinge (no defined angle) is not valid.
+// CPU twin: cpu::bending_forces::hinge_geometry.
+struct HingeTerms {
+    u: vec3<f32>,
+    weight: f32,
+    sin_half: f32,
+    valid: bool,
+}
+
+fn hinge_terms(stiffness: f32, x3: vec3<f32>, x4: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, role: u32) -> HingeTerms {
+    var t = HingeTerms(vec3<f32>(0.0), 0.0, 0.0, false);
+    let e = x4 - x3;
+    let n1 = cross(x1 - x3, x1 - x4);
+    let n2 = cross(x2 - x4, x2 - x3);
+    let e_len = length(e);
+    let n1_sq = dot(n1, n1);
+    let n2_sq = dot(n2, n2);
+    if (e_len < 1e-12 || n1_sq < 1e-24 || n2_sq < 1e-24) {
+        return t;
+    }
+    let n1_len = sqrt(n1_sq);
+    let n2_len = sqrt(n2_sq);
+    let n1_hat = n1 / n1_len;
+    let n2_hat = n2 / n2_len;
+    let cos_theta = clamp(dot(n1_hat, n2_hat), -1.0, 1.0);
+    var sin_half = sqrt(max(0.0, 0.5 * (1.0 - cos_theta)));
+    if (dot(cross(n1_hat, n2_hat), e) < 0.0) {
+        sin_half = -sin_half;
+    }
+    t.weight = stiffness * e_len * e_len / (n1_len + n2_len);
+    t.sin_half = sin_half;
+    let e_hat = e / e_len;
+    let a = n1 / n1_sq;
+    let b = n2 / n2_sq;
+    switch role {
+        case 0u: { t.u = dot(x1 - x4, e_hat) * a + dot(x2 - x4, e_hat) * b; }
+        case 1u: { t.u = -dot(x1 - x3, e_hat) * a - dot(x2 - x3, e_hat) * b; }
+        case 2u: { t.u = e_len * a; }
+        default: { t.u = e_len * b; }
+    }
+    t.valid = true;
+    return t;
+}
+
 // φ outside the grid: no contact.
 const SDF_FAR: f32 = 1e30;
 

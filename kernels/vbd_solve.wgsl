@@ -67,42 +67,13 @@ fn add_springs(i: u32, xi: vec3<f32>, f: ptr<function, vec3<f32>>, hs: ptr<funct
 // The bending force on vertex `role` of h at the iterate (as bending_forces.wgsl) plus its
 // Gauss–Newton Hessian ½cos(θ/2)·weight·uuᵀ.
 fn add_hinge(hinge: Hinge, role: u32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {
-    let x3 = x[hinge.v.x].xyz;
-    let x4 = x[hinge.v.y].xyz;
-    let x1 = x[hinge.v.z].xyz;
-    let x2 = x[hinge.v.w].xyz;
-    let e = x4 - x3;
-    let n1 = cross(x1 - x3, x1 - x4);
-    let n2 = cross(x2 - x4, x2 - x3);
-    let e_len = length(e);
-    let n1_sq = dot(n1, n1);
-    let n2_sq = dot(n2, n2);
-    if (e_len < 1e-12 || n1_sq < 1e-24 || n2_sq < 1e-24) {
+    let t = hinge_terms(hinge.stiffness, x[hinge.v.x].xyz, x[hinge.v.y].xyz, x[hinge.v.z].xyz, x[hinge.v.w].xyz, role);
+    if (!t.valid) {
         return;
     }
-    let n1_len = sqrt(n1_sq);
-    let n2_len = sqrt(n2_sq);
-    let n1_hat = n1 / n1_len;
-    let n2_hat = n2 / n2_len;
-    let cos_theta = clamp(dot(n1_hat, n2_hat), -1.0, 1.0);
-    var sin_half = sqrt(max(0.0, 0.5 * (1.0 - cos_theta)));
-    if (dot(cross(n1_hat, n2_hat), e) < 0.0) {
-        sin_half = -sin_half;
-    }
-    let weight = hinge.stiffness * e_len * e_len / (n1_len + n2_len);
-    let e_hat = e / e_len;
-    let a = n1 / n1_sq;
-    let b = n2 / n2_sq;
-    var u = vec3<f32>(0.0);
-    switch role {
-        case 0u: { u = dot(x1 - x4, e_hat) * a + dot(x2 - x4, e_hat) * b; }
-        case 1u: { u = -dot(x1 - x3, e_hat) * a - dot(x2 - x3, e_hat) * b; }
-        case 2u: { u = e_len * a; }
-        default: { u = e_len * b; }
-    }
-    *f = *f + weight * (sin_half - hinge.rest_sin_half) * u;
-    let cos_half = sqrt(max(1.0 - sin_half * sin_half, 0.0));
-    *hs = *hs + (0.5 * cos_half * weight) * outer(u, u);
+    *f = *f + t.weight * (t.sin_half - hinge.rest_sin_half) * t.u;
+    let cos_half = sqrt(max(1.0 - t.sin_half * t.sin_half, 0.0));
+    *hs = *hs + (0.5 * cos_half * t.weight) * outer(t.u, t.u);
 }
 
 fn add_bending(i: u32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {

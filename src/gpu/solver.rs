@@ -225,85 +225,14 @@ impl GpuSolver {
                 owned.push(TexelArray::with_data(ctx, label, format, bytes, none)?);
                 Ok(())
             };
-            match pass {
-                Pass::SpringForces => {
-                    let csr = model.spring_csr();
-                    add(
-                        "spring_offsets",
-                        R32Uint,
-                        bytemuck::cast_slice(&csr.offsets),
-                    )?;
-                    add("springs", Rgba32Uint, bytemuck::cast_slice(&csr.items))?;
+            if pass == Pass::VbdSolve {
+                let v = vbd.as_ref().expect("vbd buffers");
+                add("vbd_order", R32Uint, bytemuck::cast_slice(&v.order))?;
+            }
+            for kind in stage_elements(pass, energies) {
+                for (label, format, bytes) in element_arrays(model, kind) {
+                    add(label, format, &bytes)?;
                 }
-                Pass::BendingForces => {
-                    let csr = model.hinge_csr();
-                    add("hinge_offsets", R32Uint, bytemuck::cast_slice(&csr.offsets))?;
-                    add("hinge_refs", R32Uint, bytemuck::cast_slice(&csr.items))?;
-                    add("hinges", Rgba32Uint, bytemuck::cast_slice(&model.hinges))?;
-                }
-                Pass::WindForces => {
-                    let csr = model.triangle_csr();
-                    add(
-                        "triangle_offsets",
-                        R32Uint,
-                        bytemuck::cast_slice(&csr.offsets),
-                    )?;
-                    add("triangle_refs", R32Uint, bytemuck::cast_slice(&csr.items))?;
-                    let tris = model.packed_triangles();
-                    add("triangles", Rgba32Uint, bytemuck::cast_slice(&tris))?;
-                }
-                Pass::SeamForces => {
-                    let csr = model.seam_csr();
-                    add("seam_offsets", R32Uint, bytemuck::cast_slice(&csr.offsets))?;
-                    add("seam_refs", R32Uint, bytemuck::cast_slice(&csr.items))?;
-                    add("seams", Rgba32Uint, bytemuck::cast_slice(&model.seams))?;
-                }
-                Pass::SelfCollide => {
-                    let csr = model.spring_csr();
-                    add(
-                        "self_neighbour_offsets",
-                        R32Uint,
-                        bytemuck::cast_slice(&csr.offsets),
-                    )?;
-                    add(
-                        "self_neighbours",
-                        Rgba32Uint,
-                        bytemuck::cast_slice(&csr.items),
-                    )?;
-                }
-                Pass::HashClear | Pass::HashCount | Pass::HashScan | Pass::HashFill => {}
-                Pass::CollideBody => {
-                    let c = model.collider.as_ref().expect("collide_body needs a body");
-                    add("sdf", R32Float, bytemuck::cast_slice(&c.sdf.values))?;
-                }
-                Pass::VbdSolve => {
-                    let v = vbd.as_ref().expect("vbd buffers");
-                    add("vbd_order", R32Uint, bytemuck::cast_slice(&v.order))?;
-                    let csr = model.spring_csr();
-                    add(
-                        "spring_offsets",
-                        R32Uint,
-                        bytemuck::cast_slice(&csr.offsets),
-                    )?;
-                    add("springs", Rgba32Uint, bytemuck::cast_slice(&csr.items))?;
-                    if energies.bending {
-                        let csr = model.hinge_csr();
-                        add("hinge_offsets", R32Uint, bytemuck::cast_slice(&csr.offsets))?;
-                        add("hinge_refs", R32Uint, bytemuck::cast_slice(&csr.items))?;
-                        add("hinges", Rgba32Uint, bytemuck::cast_slice(&model.hinges))?;
-                    }
-                    if energies.seams {
-                        let csr = model.seam_csr();
-                        add("seam_offsets", R32Uint, bytemuck::cast_slice(&csr.offsets))?;
-                        add("seam_refs", R32Uint, bytemuck::cast_slice(&csr.items))?;
-                        add("seams", Rgba32Uint, bytemuck::cast_slice(&model.seams))?;
-                    }
-                    if energies.body {
-                        let c = model.collider.as_ref().expect("contact needs a body");
-                        add("vbd_sdf", R32Float, bytemuck::cast_slice(&c.sdf.values))?;
-                    }
-                }
-                Pass::VbdInit | Pass::VbdFinish | Pass::Integrate => {}
             }
             let (force_out, force_in) = if pass.is_force() {
                 let j = force_index;
@@ -574,5 +503,129 @@ impl Solver for GpuSolver {
             positions,
             velocities,
         })
+    }
+}
+
+/// Which element arrays a stage binds, in binding order.
+#[derive(Clone, Copy)]
+enum Elements {
+    Springs,
+    Hinges,
+    Seams,
+    Triangles,
+    SelfNeighbours,
+    Sdf,
+}
+
+fn stage_elements(pass: Pass, energies: VbdEnergies) -> Vec<Elements> {
+    match pass {
+        Pass::SpringForces => vec![Elements::Springs],
+        Pass::BendingForces => vec![Elements::Hinges],
+        Pass::WindForces => vec![Elements::Triangles],
+        Pass::SeamForces => vec![Elements::Seams],
+        Pass::SelfCollide => vec![Elements::SelfNeighbours],
+        Pass::CollideBody => vec![Elements::Sdf],
+        Pass::VbdSolve => {
+            let mut kinds = vec![Elements::Springs];
+            if energies.bending {
+                kinds.push(Elements::Hinges);
+            }
+            if energies.seams {
+                kinds.push(Elements::Seams);
+            }
+            if energies.body {
+                kinds.push(Elements::Sdf);
+            }
+            kinds
+        }
+        Pass::HashClear
+        | Pass::HashCount
+        | Pass::HashScan
+        | Pass::HashFill
+        | Pass::VbdInit
+        | Pass::VbdFinish
+        | Pass::Integrate => vec![],
+    }
+}
+
+/// The texel arrays of one kind of element: (label, texel format, bytes).
+fn element_arrays(
+    model: &ClothModel,
+    kind: Elements,
+) -> Vec<(&'static str, wgpu::TextureFormat, Vec<u8>)> {
+    let bytes = |data: &[u8]| data.to_vec();
+    match kind {
+        Elements::Springs | Elements::SelfNeighbours => {
+            let csr = model.spring_csr();
+            let (offsets, items) = match kind {
+                Elements::Springs => ("spring_offsets", "springs"),
+                _ => ("self_neighbour_offsets", "self_neighbours"),
+            };
+            vec![
+                (offsets, R32Uint, bytes(bytemuck::cast_slice(&csr.offsets))),
+                (items, Rgba32Uint, bytes(bytemuck::cast_slice(&csr.items))),
+            ]
+        }
+        Elements::Hinges => {
+            let csr = model.hinge_csr();
+            vec![
+                (
+                    "hinge_offsets",
+                    R32Uint,
+                    bytes(bytemuck::cast_slice(&csr.offsets)),
+                ),
+                (
+                    "hinge_refs",
+                    R32Uint,
+                    bytes(bytemuck::cast_slice(&csr.items)),
+                ),
+                (
+                    "hinges",
+                    Rgba32Uint,
+                    bytes(bytemuck::cast_slice(&model.hinges)),
+                ),
+            ]
+        }
+        Elements::Seams => {
+            let csr = model.seam_csr();
+            vec![
+                (
+                    "seam_offsets",
+                    R32Uint,
+                    bytes(bytemuck::cast_slice(&csr.offsets)),
+                ),
+                (
+                    "seam_refs",
+                    R32Uint,
+                    bytes(bytemuck::cast_slice(&csr.items)),
+                ),
+                (
+                    "seams",
+                    Rgba32Uint,
+                    bytes(bytemuck::cast_slice(&model.seams)),
+                ),
+            ]
+        }
+        Elements::Triangles => {
+            let csr = model.triangle_csr();
+            let tris = model.packed_triangles();
+            vec![
+                (
+                    "triangle_offsets",
+                    R32Uint,
+                    bytes(bytemuck::cast_slice(&csr.offsets)),
+                ),
+                (
+                    "triangle_refs",
+                    R32Uint,
+                    bytes(bytemuck::cast_slice(&csr.items)),
+                ),
+                ("triangles", Rgba32Uint, bytes(bytemuck::cast_slice(&tris))),
+            ]
+        }
+        Elements::Sdf => {
+            let c = model.collider.as_ref().expect("contact needs a body");
+            vec![("sdf", R32Float, bytes(bytemuck::cast_slice(&c.sdf.values)))]
+        }
     }
 }
