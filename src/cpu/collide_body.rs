@@ -9,6 +9,29 @@ fn v3(a: [f32; 4]) -> Vec3 {
     Vec3::new(a[0], a[1], a[2])
 }
 
+/// World point `x` in the body frame of this substep's pose (`d` is `x` − the body's origin).
+pub fn to_body_frame(step: &SubstepParams, x: Vec3) -> (Vec3, Vec3) {
+    let (bx, by, bz) = (v3(step.body_x), v3(step.body_y), v3(step.body_z));
+    let d = x - v3(step.body_translation);
+    (Vec3::new(bx.dot(d), by.dot(d), bz.dot(d)), d)
+}
+
+/// A body-frame direction (an SDF gradient) in the world.
+pub fn to_world(step: &SubstepParams, g: Vec3) -> Vec3 {
+    v3(step.body_x) * g.x + v3(step.body_y) * g.y + v3(step.body_z) * g.z
+}
+
+/// The velocity of the body's surface at offset `d` from its origin.
+pub fn body_velocity_at(step: &SubstepParams, d: Vec3) -> Vec3 {
+    v3(step.body_velocity) + v3(step.body_angular_velocity).cross(d)
+}
+
+/// φ (w) and ∇φ (xyz) of the body's SDF (grid in `params`) at body-frame point `p`.
+pub fn sample_body_sdf(params: &SimParams, sdf: &[f32], p: Vec3) -> Vec4 {
+    let dims = [params.sdf_dims[0], params.sdf_dims[1], params.sdf_dims[2]];
+    sdf_sample(sdf, dims, v3(params.sdf_origin), params.sdf_origin[3], p)
+}
+
 /// One particle's collision response. `query` gives φ (w) and ∇φ (xyz) at a body-frame point.
 pub fn collide_particle(
     params: &SimParams,
@@ -20,16 +43,13 @@ pub fn collide_particle(
     let mut x = p.truncate();
     let mut v_new = v;
     if p.w != 0.0 {
-        let (bx, by, bz) = (v3(step.body_x), v3(step.body_y), v3(step.body_z));
-        let t = v3(step.body_translation);
-        let d = x - t;
-        let xb = Vec3::new(bx.dot(d), by.dot(d), bz.dot(d));
+        let (xb, _) = to_body_frame(step, x);
         let s = query(xb);
         if s.w < params.thickness {
-            let n = safe_normalize(bx * s.x + by * s.y + bz * s.z);
+            let n = safe_normalize(to_world(step, s.truncate()));
             if n.dot(n) > 0.0 {
                 x += (params.thickness - s.w) * n;
-                let v_body = v3(step.body_velocity) + v3(step.body_angular_velocity).cross(x - t);
+                let v_body = body_velocity_at(step, x - v3(step.body_translation));
                 let v_rel = v - v_body;
                 let mut vn = v_rel.dot(n);
                 let mut vt = v_rel - vn * n;
@@ -69,12 +89,9 @@ pub fn collide_body(
     vel: &mut [Vec4],
     sdf: &[f32],
 ) {
-    let dims = [params.sdf_dims[0], params.sdf_dims[1], params.sdf_dims[2]];
-    let origin = v3(params.sdf_origin);
-    let cell = params.sdf_origin[3];
     for i in 0..params.num_particles as usize {
         let (x, v) = collide_particle(params, step, pos[i], vel[i].truncate(), |p| {
-            sdf_sample(sdf, dims, origin, cell, p)
+            sample_body_sdf(params, sdf, p)
         });
         pos[i] = x;
         vel[i] = v.extend(0.0);

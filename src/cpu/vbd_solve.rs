@@ -7,8 +7,8 @@
 //! share no element, so they update at once (one dispatch) without reading each other.
 
 use super::bending_forces::hinge_geometry;
+use super::collide_body::{body_velocity_at, sample_body_sdf, to_body_frame, to_world};
 use super::seam_forces::rest_gap;
-use crate::body::sdf::sdf_sample;
 use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep, SWEEP_LAST};
 use glam::{Mat3, Vec2, Vec3, Vec4};
 
@@ -145,22 +145,17 @@ pub fn vertex_system(
     }
 
     if let Some(sdf) = el.sdf {
-        let v3 = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
-        let (bx, by, bz) = (v3(step.body_x), v3(step.body_y), v3(step.body_z));
-        let d = xi - v3(step.body_translation);
-        let xb = Vec3::new(bx.dot(d), by.dot(d), bz.dot(d));
-        let o = params.sdf_origin;
-        let dims = [params.sdf_dims[0], params.sdf_dims[1], params.sdf_dims[2]];
-        let s = sdf_sample(sdf, dims, Vec3::new(o[0], o[1], o[2]), o[3], xb);
+        let (xb, d) = to_body_frame(step, xi);
+        let s = sample_body_sdf(params, sdf, xb);
         if s.w < params.thickness {
-            let g = bx * s.x + by * s.y + bz * s.z;
+            let g = to_world(step, s.truncate());
             let len = g.length();
             let n = if len > 1e-12 { g / len } else { Vec3::ZERO };
             let k_c = CONTACT_RATIO * (hess.x_axis.x + hess.y_axis.y + hess.z_axis.z) / 3.0;
             let lambda = k_c * (params.thickness - s.w);
             f += lambda * n;
             hess += k_c * outer(n, n);
-            let v_body = v3(step.body_velocity) + v3(step.body_angular_velocity).cross(d);
+            let v_body = body_velocity_at(step, d);
             let slip = moved(i) - h * v_body;
             let u = slip - slip.dot(n) * n;
             let scale = params.friction * lambda / u.length().max(FRICTION_SLIP_SPEED * h);
