@@ -33,7 +33,11 @@ struct SimParams {
     self_thickness: f32,         // m, particles of the cloth keep this far apart (self-collision)
     hash_cell: f32,              // m, spatial hash cell size (at least self_thickness)
     hash_buckets: u32,           // spatial hash table size
-    _pad2: u32,
+    strain_limit: f32,           // 1, largest edge stretch strain_limit lets through (0.1 = 10%)
+    strain_iterations: u32,      // Jacobi iterations of strain_limit per substep
+    _pad3: u32,
+    _pad4: u32,
+    _pad5: u32,
 }
 
 // Values that change per substep. One entry per substep of a frame, at a 256-byte stride,

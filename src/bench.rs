@@ -37,6 +37,7 @@ pub fn bench_model(n: u32) -> (ClothModel, SimParams, PassPlan) {
             body: false,
             self_collision: false,
             implicit: false,
+            strain_limit: false,
         },
     );
     let dt = 0.5 * model.stable_dt(INTEGRATOR_SYMPLECTIC, 0.0).unwrap_or(1e-4);

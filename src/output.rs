@@ -87,6 +87,10 @@ pub struct Summary {
     pub max_edge_strain: f32,
     /// Largest spring strain at the last frame (the result; sewing can strain more on the way).
     pub last_frame_max_edge_strain: f32,
+    /// The strain-limiting stage's cap on edge stretch (0.1 = 10%), or null when it is off.
+    pub strain_limit: Option<f32>,
+    /// Largest particle speed at any output frame, in m/s (from the `monitor` stage).
+    pub max_speed_m_s: f32,
     /// Kinetic energy at the last good frame, in J.
     pub kinetic_energy_j: f64,
     /// Seams (stitches) in the pattern; 0 without one.

@@ -26,6 +26,9 @@ pub enum Pass {
     VbdFinish,
     /// Euler integration; after every force stage.
     Integrate,
+    /// Jacobi projection of over-stretched edges back to the strain limit (positions, and
+    /// velocities by the same displacement over the step); after the step, before collisions.
+    StrainLimit,
     /// Self-collision 1/5: zero the spatial hash counts.
     HashClear,
     /// Self-collision 2/5: count particles per hash bucket.
@@ -38,11 +41,14 @@ pub enum Pass {
     SelfCollide,
     /// Particle-versus-body collision through the body's SDF; last, so the body wins.
     CollideBody,
+    /// Frame health (kinetic energy, speed, strain, finiteness), reduced per workgroup. Runs
+    /// once per output frame on every backend, never per substep: it is not in `PassPlan`.
+    Monitor,
 }
 
 impl Pass {
     /// Every stage, in execution order.
-    pub const ALL: [Pass; 14] = [
+    pub const ALL: [Pass; 16] = [
         Pass::SpringForces,
         Pass::BendingForces,
         Pass::WindForces,
@@ -51,12 +57,14 @@ impl Pass {
         Pass::VbdSolve,
         Pass::VbdFinish,
         Pass::Integrate,
+        Pass::StrainLimit,
         Pass::HashClear,
         Pass::HashCount,
         Pass::HashScan,
         Pass::HashFill,
         Pass::SelfCollide,
         Pass::CollideBody,
+        Pass::Monitor,
     ];
 
     /// The stage name shared by the kernel file, the CPU twin, tests and bench ids.
@@ -70,12 +78,14 @@ impl Pass {
             Pass::VbdSolve => "vbd_solve",
             Pass::VbdFinish => "vbd_finish",
             Pass::Integrate => "integrate",
+            Pass::StrainLimit => "strain_limit",
             Pass::HashClear => "hash_clear",
             Pass::HashCount => "hash_count",
             Pass::HashScan => "hash_scan",
             Pass::HashFill => "hash_fill",
             Pass::SelfCollide => "self_collide",
             Pass::CollideBody => "collide_body",
+            Pass::Monitor => "monitor",
         }
     }
 
@@ -96,7 +106,11 @@ impl Pass {
     pub fn writes_state(self) -> bool {
         matches!(
             self,
-            Pass::Integrate | Pass::VbdFinish | Pass::SelfCollide | Pass::CollideBody
+            Pass::Integrate
+                | Pass::VbdFinish
+                | Pass::StrainLimit
+                | Pass::SelfCollide
+                | Pass::CollideBody
         )
     }
 
@@ -111,12 +125,14 @@ impl Pass {
             Pass::VbdSolve => include_str!("../kernels/vbd_solve.wgsl"),
             Pass::VbdFinish => include_str!("../kernels/vbd_finish.wgsl"),
             Pass::Integrate => include_str!("../kernels/integrate.wgsl"),
+            Pass::StrainLimit => include_str!("../kernels/strain_limit.wgsl"),
             Pass::HashClear => include_str!("../kernels/hash_clear.wgsl"),
             Pass::HashCount => include_str!("../kernels/hash_count.wgsl"),
             Pass::HashScan => include_str!("../kernels/hash_scan.wgsl"),
             Pass::HashFill => include_str!("../kernels/hash_fill.wgsl"),
             Pass::SelfCollide => include_str!("../kernels/self_collide.wgsl"),
             Pass::CollideBody => include_str!("../kernels/collide_body.wgsl"),
+            Pass::Monitor => include_str!("../kernels/monitor.wgsl"),
         }
     }
 }
@@ -139,12 +155,14 @@ impl PassPlan {
             Pass::SeamForces => !effects.implicit && !model.seams.is_empty(),
             Pass::VbdInit | Pass::VbdSolve | Pass::VbdFinish => effects.implicit,
             Pass::Integrate => !effects.implicit,
+            Pass::StrainLimit => effects.strain_limit && !model.springs.is_empty(),
             Pass::HashClear
             | Pass::HashCount
             | Pass::HashScan
             | Pass::HashFill
             | Pass::SelfCollide => effects.self_collision,
             Pass::CollideBody => effects.body && model.collider.is_some(),
+            Pass::Monitor => false,
         };
         PassPlan {
             passes: Pass::ALL.into_iter().filter(wanted).collect(),

@@ -200,6 +200,9 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
         passes: prep.plan.names(),
         max_edge_strain: stats.max_edge_strain,
         last_frame_max_edge_strain: stats.last_edge_strain,
+        strain_limit: (prep.plan.contains(crate::plan::Pass::StrainLimit))
+            .then_some(prep.params.strain_limit),
+        max_speed_m_s: stats.max_speed,
         kinetic_energy_j: stats.kinetic_energy_j,
         seams: stats.seam_gaps.len(),
         seams_closed: (stats.seam_gaps.iter())

@@ -76,9 +76,33 @@ impl Prepared {
             .map_or(BodyState::REST, |c| c.motion.at(t))
     }
 
+    /// "particle i (panel p, pattern point (u, v) m)" for error messages: where to look.
+    pub fn describe_particle(&self, i: u32) -> String {
+        match &self.garment {
+            Some(g) if (i as usize) < g.uv.len() => {
+                let uv = g.uv[i as usize];
+                format!("particle {i} (pattern point ({:.3}, {:.3}) m)", uv.x, uv.y)
+            }
+            _ => {
+                let p = self
+                    .model
+                    .positions
+                    .get(i as usize)
+                    .copied()
+                    .unwrap_or_default();
+                format!(
+                    "particle {i} (starting at ({:.3}, {:.3}, {:.3}) m)",
+                    p.x, p.y, p.z
+                )
+            }
+        }
+    }
+
     /// Hinges the plan actually simulates (0 when bending is off).
     pub fn hinges_in_use(&self) -> usize {
-        if self.plan.contains(crate::plan::Pass::BendingForces) {
+        use crate::plan::Pass;
+        // Implicit steps evaluate the hinges inside vbd_solve.
+        if self.plan.contains(Pass::BendingForces) || self.plan.contains(Pass::VbdSolve) {
             self.model.hinges.len()
         } else {
             0
@@ -254,7 +278,15 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         // Cells at least as large as the contact distance: all contacts lie in the 27 cells.
         hash_cell: self_thickness.max(1e-6),
         hash_buckets,
-        _pad2: 0,
+        strain_limit: s.strain_limit.unwrap_or(0.0),
+        strain_iterations: if s.strain_limit.is_some() {
+            s.strain_limit_iterations
+        } else {
+            0
+        },
+        _pad3: 0,
+        _pad4: 0,
+        _pad5: 0,
     };
     Ok(Prepared {
         model,
@@ -355,6 +387,8 @@ pub struct RunStats {
     pub max_residual: Option<f32>,
     /// Largest spring strain at the last good frame.
     pub last_edge_strain: f32,
+    /// Largest particle speed at any output frame, in m/s.
+    pub max_speed: f32,
 }
 
 /// A particle rests on the body when it is within the collision thickness plus this of the
@@ -400,21 +434,25 @@ pub fn simulate(
         let steps = substep_params(prep, frame);
         let start = Instant::now();
         solver.advance(&steps)?;
-        let state = solver.state()?;
-        stats.wall_seconds += start.elapsed().as_secs_f64();
-        if let Some((i, what)) = metrics::first_non_finite(&state) {
+        // The monitor stage checks the frame on the device before anything is read back.
+        let health = solver.health()?;
+        let substeps = format!(
+            "substeps {}–{}",
+            (frame - 1) * prep.substeps + 1,
+            frame * prep.substeps
+        );
+        if let Some(i) = health.first_non_finite {
             stats.finite = false;
             return Err(Error::Unstable(format!(
-                "frame {frame}: particle {i} has a non-finite {what}; the frame was not written. \
-                 The substep ({:.3e} s) is too large for the fabric's stiffness: use \
-                 substeps = \"auto\" or more substeps",
+                "frame {frame} ({substeps}): {} particle(s) non-finite, the first {}; the frame \
+                 was not written. The substep ({:.3e} s) is too large for the fabric's \
+                 stiffness: use substeps = \"auto\" or more substeps",
+                health.non_finite,
+                prep.describe_particle(i),
                 prep.params.dt
             )));
         }
-        if let Some(r) = solver.residual()? {
-            stats.max_residual = Some(stats.max_residual.map_or(r, |m| m.max(r)));
-        }
-        let strain = metrics::max_edge_strain(&state.positions, &prep.model.springs);
+        let strain = health.max_strain;
         if strain > prep.max_strain {
             let advice = if prep.colors.is_some() {
                 "the implicit solve did not hold the cloth together: use more substeps or \
@@ -424,17 +462,25 @@ pub fn simulate(
                  more substeps, or integrator = \"implicit\""
             };
             return Err(Error::Unstable(format!(
-                "frame {frame}: a spring is stretched by {:.0}%, past solver.max_strain = {:.0}%: \
-                 the frame exploded and was not written. At a substep of {:.3e} s, {advice}",
+                "frame {frame} ({substeps}): a spring at {} is stretched by {:.0}%, past \
+                 solver.max_strain = {:.0}%: the frame exploded and was not written. At a \
+                 substep of {:.3e} s, {advice}",
+                prep.describe_particle(health.worst),
                 100.0 * strain,
                 100.0 * prep.max_strain,
                 prep.params.dt
             )));
         }
+        let state = solver.state()?;
+        stats.wall_seconds += start.elapsed().as_secs_f64();
+        if let Some(r) = solver.residual()? {
+            stats.max_residual = Some(stats.max_residual.map_or(r, |m| m.max(r)));
+        }
+        stats.max_speed = stats.max_speed.max(health.max_speed);
         stats.frames_run = frame;
         stats.max_edge_strain = stats.max_edge_strain.max(strain);
         stats.last_edge_strain = strain;
-        stats.kinetic_energy_j = metrics::kinetic_energy(&prep.model, &state);
+        stats.kinetic_energy_j = health.kinetic_energy;
         stats.seam_gaps = seam_gaps(&state);
         if let Some(c) = &prep.model.collider {
             let body = prep.body_state(frame as f32 * prep.frame_dt);

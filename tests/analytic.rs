@@ -226,3 +226,82 @@ fn explicit_energy_grows_as_predicted() {
         "×{ratio} vs predicted ×{predicted}"
     );
 }
+
+/// One strain-limiting iteration on a single edge stretched to twice its rest length: the edge
+/// comes back to exactly (1 + limit)·L, each end moving by its inverse-mass share, and each
+/// velocity changes by its displacement over the step. The spring has zero stiffness and there
+/// is no gravity, so `integrate` moves nothing and the step is the strain limit alone.
+fn strain_limit_single_edge(make: impl Fn(&ClothModel, SimParams, &PassPlan) -> Box<dyn Solver>) {
+    let (l0, limit, dt) = (0.05f32, 0.1f32, 1e-3f32);
+    for pinned_top in [true, false] {
+        let mut model = chain(1, 0.01, 0.0, l0, 0.0);
+        model.pinned[0] = pinned_top;
+        model.positions[1].y = 2.0 - 2.0 * l0;
+        let plan = PassPlan::new(
+            &model,
+            Effects {
+                strain_limit: true,
+                ..Effects::default()
+            },
+        );
+        assert_eq!(
+            plan.passes,
+            vec![Pass::SpringForces, Pass::Integrate, Pass::StrainLimit]
+        );
+        let params = SimParams {
+            num_particles: 2,
+            integrator: INTEGRATOR_SYMPLECTIC,
+            dt,
+            strain_limit: limit,
+            strain_iterations: 1,
+            ..Default::default()
+        };
+        let mut solver = make(&model, params, &plan);
+        solver.advance(&[SubstepParams::default()]).unwrap();
+        let s = solver.state().unwrap();
+        // The top end takes all of the 0.9·L correction when pinned, half of it otherwise.
+        let top_share = if pinned_top { 0.0 } else { 0.5 };
+        let fix = (2.0 - (1.0 + limit)) * l0;
+        let expect_y = [
+            2.0 - top_share * fix,
+            2.0 - 2.0 * l0 + (1.0 - top_share) * fix,
+        ];
+        let expect_v = [-top_share * fix / dt, (1.0 - top_share) * fix / dt];
+        for i in 0..2 {
+            // Positions near 2 m: the correction (a few f32 operations on 5 cm lengths, ~1e-8 m)
+            // plus the rounding of storing y + Δ (½ulp(2 m) = 1.2e-7 m), and the setup's own
+            // rounding of 2 − 2L: 3e-7 m covers them. Velocities are Δ/dt ≈ 45 m/s, and Δ
+            // inherits the rounding of the two stored input positions (½ulp of 1.9 and 2 m,
+            // 1.2e-7 m together), which dt = 1e-3 s turns into 1.2e-4 m/s; plus a few ulp of
+            // 45 m/s (2e-5): 1.4e-4 m/s.
+            assert!(
+                (s.positions[i].y - expect_y[i]).abs() <= 3e-7,
+                "pinned_top {pinned_top}: particle {i} at y = {} m, expected {} m",
+                s.positions[i].y,
+                expect_y[i]
+            );
+            assert!(
+                (s.velocities[i].y - expect_v[i]).abs() <= 1.4e-4,
+                "pinned_top {pinned_top}: particle {i} at v = {} m/s, expected {} m/s",
+                s.velocities[i].y,
+                expect_v[i]
+            );
+        }
+        let length = s.positions[0].y - s.positions[1].y;
+        assert!(
+            (length - (1.0 + limit) * l0).abs() <= 5e-7,
+            "edge length {length} m"
+        );
+    }
+}
+
+#[test]
+fn strain_limit_single_edge_cpu() {
+    strain_limit_single_edge(|m, p, plan| Box::new(CpuSolver::new(m, p, plan)));
+}
+
+#[test]
+fn strain_limit_single_edge_gpu() {
+    let Some(ctx) = gpu() else { return };
+    strain_limit_single_edge(|m, p, plan| Box::new(GpuSolver::new(ctx, m, p, plan, 1).unwrap()));
+}

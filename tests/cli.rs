@@ -66,7 +66,12 @@ fn run_writes_frames_and_a_complete_summary() {
     assert_eq!(summary["finite"], true);
     assert_eq!(
         summary["passes"],
-        serde_json::json!(["spring_forces", "bending_forces", "integrate"])
+        serde_json::json!([
+            "spring_forces",
+            "bending_forces",
+            "integrate",
+            "strain_limit"
+        ])
     );
     // Frames 0..=3 plus the summary, and each listed file exists.
     let outputs = summary["outputs"].as_array().unwrap();
@@ -94,7 +99,8 @@ fn plan_json_lists_the_stages() {
             "spring_forces",
             "bending_forces",
             "wind_forces",
-            "integrate"
+            "integrate",
+            "strain_limit"
         ])
     );
     let scene = common::fixture("scenes/free_fall.toml");
@@ -104,7 +110,7 @@ fn plan_json_lists_the_stages() {
     // free_fall has no bending key, no wind and no pins.
     assert_eq!(
         plan["passes"],
-        serde_json::json!(["spring_forces", "integrate"])
+        serde_json::json!(["spring_forces", "integrate", "strain_limit"])
     );
 }
 
@@ -183,7 +189,7 @@ fn an_exploded_frame_stops_the_run_and_is_not_written() {
 }
 
 /// A solver whose state turns NaN after its first advance.
-struct GoesNan(drapekit::cpu::CpuSolver, bool);
+struct GoesNan(drapekit::cpu::CpuSolver);
 
 impl drapekit::solver::Solver for GoesNan {
     fn backend_name(&self) -> &'static str {
@@ -196,15 +202,15 @@ impl drapekit::solver::Solver for GoesNan {
         &mut self,
         steps: &[drapekit::model::layout::SubstepParams],
     ) -> Result<(), drapekit::Error> {
-        self.1 = true;
-        self.0.advance(steps)
+        self.0.advance(steps)?;
+        self.0.pos[7].y = f32::NAN;
+        Ok(())
     }
     fn state(&mut self) -> Result<drapekit::solver::ParticleState, drapekit::Error> {
-        let mut s = self.0.state()?;
-        if self.1 {
-            s.positions[7].y = f32::NAN;
-        }
-        Ok(s)
+        self.0.state()
+    }
+    fn health(&mut self) -> Result<drapekit::solver::Health, drapekit::Error> {
+        self.0.health()
     }
     fn set_state(&mut self, state: &drapekit::solver::ParticleState) {
         self.0.set_state(state)
@@ -218,10 +224,11 @@ impl drapekit::solver::Solver for GoesNan {
 fn a_non_finite_frame_stops_the_run_and_is_not_used() {
     let prep =
         prepare(&Scene::load(&common::fixture("scenes/hanging_cloth.toml")).unwrap()).unwrap();
-    let mut solver = GoesNan(
-        drapekit::cpu::CpuSolver::new(&prep.model, prep.params, &prep.plan),
-        false,
-    );
+    let mut solver = GoesNan(drapekit::cpu::CpuSolver::new(
+        &prep.model,
+        prep.params,
+        &prep.plan,
+    ));
     let mut stats = drapekit::sim::RunStats::default();
     let mut seen = Vec::new();
     let err = drapekit::sim::simulate(&prep, &mut solver, &mut stats, |f, _| {

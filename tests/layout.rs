@@ -55,7 +55,14 @@ fn sim_params_layout() {
             ("self_thickness", offset_of!(SimParams, self_thickness)),
             ("hash_cell", offset_of!(SimParams, hash_cell)),
             ("hash_buckets", offset_of!(SimParams, hash_buckets)),
-            ("_pad2", offset_of!(SimParams, _pad2)),
+            ("strain_limit", offset_of!(SimParams, strain_limit)),
+            (
+                "strain_iterations",
+                offset_of!(SimParams, strain_iterations),
+            ),
+            ("_pad3", offset_of!(SimParams, _pad3)),
+            ("_pad4", offset_of!(SimParams, _pad4)),
+            ("_pad5", offset_of!(SimParams, _pad5)),
         ],
     );
 }

@@ -42,6 +42,31 @@ fn pass_parity_in(prep: Prepared, pass: Pass) {
         let dv = max_abs_diff(&g.velocities, &cpu.vel);
         assert!(dx <= 4e-7, "positions differ by {dx} m");
         assert!(dv <= 4e-7, "velocities differ by {dv} m/s");
+    } else if pass == Pass::StrainLimit {
+        // Each of the `strain_iterations` Jacobi iterations adds to a position O(2 m) the mean
+        // of ≤ 6 corrections share·(|d| − L)·d/|d|; the cancellation in |d| − L carries a
+        // relative 2e-6 of each correction (as for springs below), and storing p + Δ rounds by
+        // 2^-24·2 m ≈ 1.2e-7 m. So per iteration ≤ 1.2e-7 m + 2e-6·max|Δ|, and the velocity
+        // (v + Δ/h) differs by that over h plus the rounding of v itself.
+        let g = gpu.state().unwrap();
+        let moved = (cpu.pos.iter().zip(&state.positions))
+            .map(|(a, b)| (*a - *b).truncate().length())
+            .fold(0.0f32, f32::max);
+        assert!(moved > 1e-4, "strain_limit moved nothing ({moved} m)");
+        let k = prep.params.strain_iterations as f32;
+        let dx_bound = k * (1.2e-7 + 2e-6 * moved);
+        let v_scale = max_norm(&cpu.vel);
+        let dv_bound = dx_bound / prep.params.dt + k * 1.2e-7 * v_scale;
+        let dx = max_abs_diff(&g.positions, &cpu.pos);
+        let dv = max_abs_diff(&g.velocities, &cpu.vel);
+        assert!(
+            dx <= dx_bound,
+            "positions differ by {dx} m (bound {dx_bound})"
+        );
+        assert!(
+            dv <= dv_bound,
+            "velocities differ by {dv} m/s (bound {dv_bound})"
+        );
     } else {
         // Each force is a sum of up to ~12 terms, each a product of a few f32 operations. The
         // worst amplification is the cancellation in (|d| − L0): |d| ≈ 3 cm carries a rounding of
@@ -95,6 +120,12 @@ fn parity_seam_forces_while_sewing() {
     let prep = prepare(&scene).unwrap();
     assert!(prep.model.seams.iter().all(|s| s.open_gap > 0.05));
     pass_parity_in(prep, Pass::SeamForces);
+}
+
+#[test]
+fn parity_strain_limit() {
+    // The 5 mm perturbation stretches the flag's 4.3 cm edges by up to 23%: past the 10% limit.
+    pass_parity(Pass::StrainLimit);
 }
 
 #[test]
@@ -161,4 +192,52 @@ fn trajectory_parity_symplectic() {
 #[test]
 fn trajectory_parity_explicit() {
     trajectory_parity(INTEGRATOR_EXPLICIT);
+}
+
+/// The monitor stage's per-workgroup partials from one perturbed state: the kinetic energy is a
+/// tree sum of 64 terms ½m|v|² (each a few f32 operations: relative 1e-6 of the largest term
+/// per level, 6 levels), the speeds and strains are single evaluations (strain: the |d| − L
+/// cancellation, 2e-6 relative as for springs), and the worst particle and counts are exact
+/// unless two strains tie within that rounding.
+#[test]
+fn parity_monitor() {
+    let Some(ctx) = gpu() else { return };
+    let prep = flag();
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
+    let mut state = perturbed(&cpu.state().unwrap(), 11, 5e-3, 0.5);
+    // Two broken particles: the first non-finite one and the count must agree.
+    state.positions[700].y = f32::NAN;
+    state.velocities[300].x = f32::INFINITY;
+    cpu.set_state(&state);
+    gpu.set_state(&state);
+    let c = cpu.health().unwrap();
+    let g = gpu.health().unwrap();
+    assert_eq!(c.non_finite, 2);
+    assert_eq!(c.first_non_finite, Some(300));
+    assert_eq!(
+        (g.non_finite, g.first_non_finite),
+        (c.non_finite, c.first_non_finite)
+    );
+    assert!(c.kinetic_energy > 0.0 && c.max_strain > 0.0);
+    let de = (g.kinetic_energy - c.kinetic_energy).abs();
+    assert!(
+        de <= 1e-5 * c.kinetic_energy,
+        "kinetic energy {} vs {}",
+        g.kinetic_energy,
+        c.kinetic_energy
+    );
+    assert!((g.max_speed - c.max_speed).abs() <= 1e-6 * c.max_speed);
+    assert!((g.max_strain - c.max_strain).abs() <= 2e-6 * (1.0 + c.max_strain.abs()));
+    assert_eq!(g.worst, c.worst, "worst particle");
+    // The CPU's energy is the f64 sum of the same ½m|v|² over finite free particles.
+    let direct: f64 = (state.positions.iter().zip(&state.velocities))
+        .filter(|(p, v)| p.w > 0.0 && p.is_finite() && v.is_finite())
+        .map(|(p, v)| 0.5 * v.truncate().length_squared() as f64 / p.w as f64)
+        .sum();
+    assert!(
+        (c.kinetic_energy - direct).abs() <= 1e-5 * direct,
+        "{} vs {direct}",
+        c.kinetic_energy
+    );
 }

@@ -8,9 +8,11 @@ mod hash_count;
 mod hash_fill;
 mod hash_scan;
 mod integrate;
+mod monitor;
 mod seam_forces;
 mod self_collide;
 mod spring_forces;
+mod strain_limit;
 mod vbd_finish;
 mod vbd_init;
 mod vbd_solve;
@@ -23,9 +25,11 @@ pub use hash_count::{hash_bucket, hash_cell_of, hash_count};
 pub use hash_fill::hash_fill;
 pub use hash_scan::hash_scan;
 pub use integrate::integrate;
+pub use monitor::monitor;
 pub use seam_forces::{rest_gap, seam_force, seam_forces};
 pub use self_collide::{point_triangle_impulses, self_collide};
 pub use spring_forces::spring_forces;
+pub use strain_limit::strain_limit;
 pub use vbd_finish::vbd_finish;
 pub use vbd_init::vbd_init;
 pub use vbd_solve::{solve3, vbd_solve, vertex_system, VbdElements};
@@ -63,6 +67,10 @@ pub struct CpuSolver {
     cloth_edges: Vec<[u32; 2]>,
     /// Implicit Euler's data (public for per-stage parity tests).
     pub vbd: Option<Vbd>,
+    /// Every particle's springs, for the frame-health `monitor` stage.
+    monitor_springs: Csr<SpringRef>,
+    /// Strain limiting's springs and its Jacobi scratch pair (positions, velocities).
+    strain: Option<(Csr<SpringRef>, Vec<Vec4>, Vec<Vec4>)>,
 }
 
 /// Vertex Block Descent: the elements, the colour order and sweeps, and the solve's arrays.
@@ -146,6 +154,10 @@ impl CpuSolver {
             } else {
                 None
             },
+            monitor_springs: model.spring_csr(),
+            strain: plan
+                .contains(Pass::StrainLimit)
+                .then(|| (model.spring_csr(), vec![Vec4::ZERO; n], vec![Vec4::ZERO; n])),
             vbd: plan.contains(Pass::VbdSolve).then(|| {
                 let coloring = model.vertex_coloring();
                 Vbd {
@@ -167,6 +179,12 @@ impl CpuSolver {
     /// The stages this solver holds data for (its plan).
     pub fn plan(&self) -> &PassPlan {
         &self.plan
+    }
+
+    /// The `monitor` stage's per-block partials of the current state.
+    pub fn health_partials(&self) -> Vec<crate::solver::HealthPartial> {
+        let csr = &self.monitor_springs;
+        monitor(&self.params, &self.pos, &self.vel, &csr.offsets, &csr.items)
     }
 
     /// Runs one stage once. Panics if the stage is not in the plan: that is a caller bug.
@@ -312,6 +330,30 @@ impl CpuSolver {
                 vbd_finish(p, &v.x, &mut self.pos, &mut self.vel);
             }
             Pass::Integrate => integrate(p, &mut self.pos, &mut self.vel, &mut self.force),
+            Pass::Monitor => {
+                panic!("monitor runs per frame through health(), not as a substep stage")
+            }
+            Pass::StrainLimit => {
+                let (csr, pos_out, vel_out) = self
+                    .strain
+                    .as_mut()
+                    .expect("strain_limit is not in the plan");
+                // Jacobi: each iteration reads one state and writes the other, as the kernel
+                // ping-pongs its textures.
+                for _ in 0..p.strain_iterations {
+                    strain_limit(
+                        p,
+                        &self.pos,
+                        &self.vel,
+                        &csr.offsets,
+                        &csr.items,
+                        pos_out,
+                        vel_out,
+                    );
+                    std::mem::swap(&mut self.pos, pos_out);
+                    std::mem::swap(&mut self.vel, vel_out);
+                }
+            }
         }
     }
 }
@@ -376,6 +418,12 @@ impl Solver for CpuSolver {
 
     fn set_params(&mut self, params: &SimParams) {
         self.params = *params;
+    }
+
+    fn health(&mut self) -> Result<crate::solver::Health, Error> {
+        Ok(crate::solver::Health::from_partials(
+            &self.health_partials(),
+        ))
     }
 
     fn residual(&mut self) -> Result<Option<f32>, Error> {

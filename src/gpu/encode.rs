@@ -41,22 +41,24 @@ impl GpuSolver {
                         if let Some(force_in) = &stage.force_in {
                             cpass.set_bind_group(1, force_in, &[]);
                         }
-                        if stage.sweeps.is_empty() {
-                            cpass.set_bind_group(0, &stage.bind_groups[self.current], &offset);
-                            cpass.dispatch_workgroups(stage.dispatch.0, stage.dispatch.1, 1);
-                        }
-                        // vbd_solve: one dispatch per colour per iteration, in sweep order.
-                        for &(sweep_offset, (gx, gy)) in &stage.sweeps {
-                            let mut offsets = offset.clone();
-                            offsets.push(sweep_offset);
-                            cpass.set_bind_group(0, &stage.bind_groups[self.current], &offsets);
-                            cpass.dispatch_workgroups(gx, gy, 1);
-                        }
                         if let Some(out) = stage.force_out {
                             self.last_forces = out;
                         }
-                        if pass.writes_state() {
-                            self.current = 1 - self.current;
+                        for _ in 0..stage.repeats {
+                            if stage.sweeps.is_empty() {
+                                cpass.set_bind_group(0, &stage.bind_groups[self.current], &offset);
+                                cpass.dispatch_workgroups(stage.dispatch.0, stage.dispatch.1, 1);
+                            }
+                            // vbd_solve: one dispatch per colour per iteration, in sweep order.
+                            for &(sweep_offset, (gx, gy)) in &stage.sweeps {
+                                let mut offsets = offset.clone();
+                                offsets.push(sweep_offset);
+                                cpass.set_bind_group(0, &stage.bind_groups[self.current], &offsets);
+                                cpass.dispatch_workgroups(gx, gy, 1);
+                            }
+                            if pass.writes_state() {
+                                self.current = 1 - self.current;
+                            }
                         }
                     }
                 }

@@ -37,6 +37,9 @@ pub(super) struct Stage {
     pub(super) uses_substep: bool,
     /// `vbd_solve` only: one (sweep uniform offset, workgroups) per dispatch of a substep.
     pub(super) sweeps: Vec<(u32, (u32, u32))>,
+    /// Dispatches per substep of a ping-pong stage (`strain_limit`'s Jacobi iterations); 1
+    /// otherwise.
+    pub(super) repeats: u32,
     /// Workgroups in x and y.
     pub(super) dispatch: (u32, u32),
 }
@@ -182,5 +185,6 @@ pub(super) fn build_stage(
             .iter()
             .any(|b| matches!(b, Binding::SubstepUniform(_))),
         sweeps: Vec::new(),
+        repeats: 1,
     }
 }

@@ -45,7 +45,7 @@ impl GpuSolver {
             .collect())
     }
 
-    fn read_u32(&self, buffer: &wgpu::Buffer) -> Result<Vec<u32>, Error> {
+    pub(super) fn read_u32(&self, buffer: &wgpu::Buffer) -> Result<Vec<u32>, Error> {
         let size = buffer.size();
         let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("hash staging"),

@@ -64,6 +64,8 @@ pub struct GpuSolver {
     pub(super) resource_labels: Vec<&'static str>,
     pub(super) hash: Option<HashBuffers>,
     pub(super) vbd: Option<VbdBuffers>,
+    /// The `monitor` stage's per-workgroup partials (two `vec4<u32>` each).
+    pub(super) health: wgpu::Buffer,
 }
 
 impl GpuSolver {
@@ -214,9 +216,18 @@ impl GpuSolver {
                 (max_x, total.div_ceil(max_x))
             }
         };
+        let (gx, gy) = dispatch_for(n as u32);
+        labels.push("health_partials");
+        let health = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("health_partials"),
+            size: 32 * (gx * gy) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
         let mut stages = Vec::new();
         let mut force_index = 0;
-        for &pass in &plan.passes {
+        // The substep plan, then the per-frame monitor.
+        for &pass in plan.passes.iter().chain(&[Pass::Monitor]) {
             // Stage-specific arrays live as long as the bind groups that hold them.
             let mut owned: Vec<TexelArray> = Vec::new();
             let mut add = |label: &'static str, format, bytes: &[u8]| -> Result<(), Error> {
@@ -373,6 +384,23 @@ impl GpuSolver {
                         Binding::Write(&pos[1 - p]),
                         Binding::Write(&vel[1 - p]),
                     ],
+                    Pass::StrainLimit => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Read(&pos[p]),
+                        Binding::Read(&vel[p]),
+                        o(0),
+                        o(1),
+                        Binding::Write(&pos[1 - p]),
+                        Binding::Write(&vel[1 - p]),
+                    ],
+                    Pass::Monitor => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Read(&pos[p]),
+                        Binding::Read(&vel[p]),
+                        o(0),
+                        o(1),
+                        Binding::Storage(&health, false),
+                    ],
                     Pass::Integrate => vec![
                         Binding::Uniform(&params_buf),
                         Binding::Read(&pos[p]),
@@ -409,6 +437,9 @@ impl GpuSolver {
                     .map(|(k, s)| ((k as u64 * v.sweep_stride) as u32, dispatch_for(s.count)))
                     .collect();
             }
+            if pass == Pass::StrainLimit {
+                stage.repeats = params.strain_iterations;
+            }
             stages.push(stage);
         }
 
@@ -427,6 +458,7 @@ impl GpuSolver {
             resource_labels: labels,
             hash,
             vbd,
+            health,
         })
     }
 
@@ -461,6 +493,23 @@ impl Solver for GpuSolver {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| Error::Gpu(format!("waiting for the GPU failed: {e}")))?;
         Ok(())
+    }
+
+    fn health(&mut self) -> Result<crate::solver::Health, Error> {
+        self.run_passes(&[Pass::Monitor], &[SubstepParams::default()])?;
+        let words = self.read_u32(&self.health)?;
+        let partials: Vec<_> = words
+            .chunks_exact(8)
+            .map(|w| crate::solver::HealthPartial {
+                kinetic_energy: f32::from_bits(w[0]),
+                max_speed: f32::from_bits(w[1]),
+                max_strain: f32::from_bits(w[2]),
+                worst: w[3],
+                non_finite: w[4],
+                first_non_finite: w[5],
+            })
+            .collect();
+        Ok(crate::solver::Health::from_partials(&partials))
     }
 
     fn residual(&mut self) -> Result<Option<f32>, Error> {
@@ -519,7 +568,7 @@ enum Elements {
 
 fn stage_elements(pass: Pass, energies: VbdEnergies) -> Vec<Elements> {
     match pass {
-        Pass::SpringForces => vec![Elements::Springs],
+        Pass::SpringForces | Pass::StrainLimit | Pass::Monitor => vec![Elements::Springs],
         Pass::BendingForces => vec![Elements::Hinges],
         Pass::WindForces => vec![Elements::Triangles],
         Pass::SeamForces => vec![Elements::Seams],

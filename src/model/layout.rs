@@ -43,8 +43,16 @@ pub struct SimParams {
     pub hash_cell: f32,
     /// Spatial hash table size.
     pub hash_buckets: u32,
+    /// Largest edge stretch that `strain_limit` lets through (0.1 = 10% over rest).
+    pub strain_limit: f32,
+    /// Jacobi iterations of `strain_limit` per substep (0 when the stage is off).
+    pub strain_iterations: u32,
     /// Padding.
-    pub _pad2: u32,
+    pub _pad3: u32,
+    /// Padding.
+    pub _pad4: u32,
+    /// Padding.
+    pub _pad5: u32,
 }
 
 /// Per-substep values (WGSL `SubstepParams`), one per substep at a 256-byte stride.

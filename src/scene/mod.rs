@@ -42,6 +42,8 @@ pub struct Effects {
     pub self_collision: bool,
     /// Backward Euler (Vertex Block Descent) instead of an explicit force-then-integrate step.
     pub implicit: bool,
+    /// Edge stretch is capped after each step.
+    pub strain_limit: bool,
 }
 
 /// A validated scene in SI units.
@@ -159,6 +161,7 @@ impl Scene {
             body: self.body.is_some(),
             self_collision: self.self_collision.is_some(),
             implicit: self.solver.integrator == INTEGRATOR_IMPLICIT,
+            strain_limit: self.solver.strain_limit.is_some(),
         }
     }
 }

@@ -200,6 +200,23 @@ pub(super) struct RawSolver {
     #[serde(default = "default_max_strain")]
     pub(super) max_strain: f64,
     pub(super) max_memory_mb: Option<f64>,
+    pub(super) strain_limit: Option<RawStrainLimit>,
+    #[serde(default = "default_strain_limit_iterations")]
+    pub(super) strain_limit_iterations: i64,
+}
+
+/// `strain_limit = 0.1`, or `true` (the default limit) / `false` (off).
+#[derive(Deserialize)]
+#[serde(untagged)]
+pub(super) enum RawStrainLimit {
+    Switch(bool),
+    Limit(f64),
+}
+
+/// Jacobi sweeps of the strain limit per substep: enough to fix an isolated over-stretched edge
+/// and its neighbours; a long chain takes several substeps (README, "Strain limiting").
+fn default_strain_limit_iterations() -> i64 {
+    4
 }
 
 fn default_fps() -> f64 {
