@@ -147,6 +147,8 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
     if result.is_ok() && exporter.wants_frames() && !exporter.on_schedule(last) {
         outputs.extend(exporter.frame(last, &solver.state()?.positions)?);
     }
+    // The caches hold the frames written so far, also when the run stopped early.
+    outputs.extend(exporter.finish()?);
     if result.is_ok() {
         outputs.extend(write_previews(
             &scene,

@@ -1,7 +1,10 @@
 //! What a run writes of its frames: an OBJ per written frame (smooth normals, a group per
-//! panel) and the body beside them.
+//! panel), the body beside them, a PC2 point cache and an animated glTF binary. The last two
+//! need every written frame, so they are kept in memory and written at the end.
 
+pub mod glb;
 pub mod obj;
+pub mod pc2;
 
 use crate::atomic_file::write_atomic;
 use crate::body::Collider;
@@ -12,7 +15,12 @@ use glam::{Vec2, Vec3, Vec4};
 use obj::Group;
 use std::path::{Path, PathBuf};
 
-/// Writes a run's frames as they come.
+/// The point cache's file name.
+pub const PC2_FILE: &str = "cloth.pc2";
+/// The glTF binary's file name.
+pub const GLB_FILE: &str = "garment.glb";
+
+/// Writes a run's frames as they come and its caches at the end.
 pub struct Exporter<'a> {
     dir: PathBuf,
     settings: OutputSettings,
@@ -21,6 +29,8 @@ pub struct Exporter<'a> {
     uv: Option<&'a [Vec2]>,
     groups: Vec<Group>,
     body: Option<&'a Collider>,
+    /// The written frames' numbers and positions, kept for the PC2 and glTF files.
+    kept: Vec<(u32, Vec<Vec3>)>,
     written: usize,
 }
 
@@ -43,13 +53,14 @@ impl<'a> Exporter<'a> {
             uv: prep.garment.as_ref().map(|g| &g.uv[..]),
             groups,
             body: prep.model.collider.as_deref(),
+            kept: Vec::new(),
             written: 0,
         }
     }
 
     /// Whether any file is written per frame (if not, no frame needs reading back).
     pub fn wants_frames(&self) -> bool {
-        self.settings.obj
+        self.settings.obj || self.settings.pc2 || self.settings.gltf
     }
 
     /// Whether `frame` is on the `every` schedule.
@@ -57,7 +68,7 @@ impl<'a> Exporter<'a> {
         frame.is_multiple_of(self.settings.every)
     }
 
-    /// Writes one frame and returns the names of the files written.
+    /// Writes (or keeps) one frame and returns the names of the files written.
     pub fn frame(&mut self, frame: u32, positions: &[Vec4]) -> Result<Vec<String>, Error> {
         let positions: Vec<Vec3> = positions.iter().map(|p| p.truncate()).collect();
         let mut names = Vec::new();
@@ -82,7 +93,59 @@ impl<'a> Exporter<'a> {
                 }
             }
         }
+        if self.settings.pc2 || self.settings.gltf {
+            self.kept.push((frame, positions));
+        }
         self.written += 1;
+        Ok(names)
+    }
+
+    /// Writes the point cache and the glTF binary of the frames seen so far (also after a run
+    /// that stopped early) and returns their names.
+    pub fn finish(&self) -> Result<Vec<String>, Error> {
+        let mut names = Vec::new();
+        if self.kept.is_empty() {
+            return Ok(names);
+        }
+        let samples: Vec<Vec<Vec3>> = self.kept.iter().map(|(_, p)| p.clone()).collect();
+        if self.settings.pc2 {
+            // Samples are `every` frames apart from the first; a last frame written between
+            // them (the settle rule) takes the next slot.
+            let start = self.kept[0].0 as f32;
+            let bytes = pc2::pc2_bytes(&samples, start, self.settings.every as f32)
+                .ok_or_else(|| self.too_large(PC2_FILE))?;
+            self.write(PC2_FILE, &bytes)?;
+            names.push(PC2_FILE.to_string());
+        }
+        if self.settings.gltf {
+            let times: Vec<f32> = (self.kept.iter())
+                .map(|(f, _)| *f as f32 * self.frame_dt)
+                .collect();
+            let cloth = glb::ClothTrack {
+                triangles: self.triangles,
+                uv: self.uv,
+                times: &times,
+                frames: &samples,
+            };
+            let body = self.body.map(|c| glb::BodyTrack {
+                positions: &c.body.mesh.positions,
+                triangles: &c.body.mesh.triangles,
+                poses: if c.motion.moves() {
+                    let pose = |t: f32| c.motion.at(t);
+                    times
+                        .iter()
+                        .map(|&t| (pose(t).rotation, pose(t).translation))
+                        .collect()
+                } else {
+                    let still = c.motion.at(0.0);
+                    vec![(still.rotation, still.translation)]
+                },
+            });
+            let bytes =
+                glb::glb_bytes(&cloth, body.as_ref()).ok_or_else(|| self.too_large(GLB_FILE))?;
+            self.write(GLB_FILE, &bytes)?;
+            names.push(GLB_FILE.to_string());
+        }
         Ok(names)
     }
 
@@ -96,5 +159,13 @@ impl<'a> Exporter<'a> {
 
     fn write(&self, name: &str, bytes: &[u8]) -> Result<(), Error> {
         write_atomic(&self.dir.join(name), bytes)
+    }
+
+    /// The only way the encoders refuse consistent frames: counts past their 32-bit fields.
+    fn too_large(&self, name: &str) -> Error {
+        Error::io(
+            &self.dir.join(name),
+            std::io::Error::other("the run is too large for the format's 32-bit sizes"),
+        )
     }
 }
