@@ -30,7 +30,8 @@ pub struct Exporter<'a> {
     groups: Vec<Group>,
     body: Option<&'a Collider>,
     /// The written frames' numbers and positions, kept for the PC2 and glTF files.
-    kept: Vec<(u32, Vec<Vec3>)>,
+    kept_frames: Vec<u32>,
+    kept: Vec<Vec<Vec3>>,
     written: usize,
 }
 
@@ -53,6 +54,7 @@ impl<'a> Exporter<'a> {
             uv: prep.garment.as_ref().map(|g| &g.uv[..]),
             groups,
             body: prep.model.collider.as_deref(),
+            kept_frames: Vec::new(),
             kept: Vec::new(),
             written: 0,
         }
@@ -94,7 +96,8 @@ impl<'a> Exporter<'a> {
             }
         }
         if self.settings.pc2 || self.settings.gltf {
-            self.kept.push((frame, positions));
+            self.kept_frames.push(frame);
+            self.kept.push(positions);
         }
         self.written += 1;
         Ok(names)
@@ -107,25 +110,24 @@ impl<'a> Exporter<'a> {
         if self.kept.is_empty() {
             return Ok(names);
         }
-        let samples: Vec<Vec<Vec3>> = self.kept.iter().map(|(_, p)| p.clone()).collect();
         if self.settings.pc2 {
             // Samples are `every` frames apart from the first; a last frame written between
             // them (the settle rule) takes the next slot.
-            let start = self.kept[0].0 as f32;
-            let bytes = pc2::pc2_bytes(&samples, start, self.settings.every as f32)
+            let start = self.kept_frames[0] as f32;
+            let bytes = pc2::pc2_bytes(&self.kept, start, self.settings.every as f32)
                 .ok_or_else(|| self.too_large(PC2_FILE))?;
             self.write(PC2_FILE, &bytes)?;
             names.push(PC2_FILE.to_string());
         }
         if self.settings.gltf {
-            let times: Vec<f32> = (self.kept.iter())
-                .map(|(f, _)| *f as f32 * self.frame_dt)
+            let times: Vec<f32> = (self.kept_frames.iter())
+                .map(|&f| f as f32 * self.frame_dt)
                 .collect();
             let cloth = glb::ClothTrack {
                 triangles: self.triangles,
                 uv: self.uv,
                 times: &times,
-                frames: &samples,
+                frames: &self.kept,
             };
             let body = self.body.map(|c| glb::BodyTrack {
                 positions: &c.body.mesh.positions,
