@@ -7,7 +7,7 @@
 //! Modules form layers that import only downward (README.md, "Architecture"): ground
 //! (`error`, `check`, `atomic_file`) → geometry (`mesh`, `pattern`, `body`) → `scene` →
 //! `model` → `plan` and `solver` → backends (`cpu`, `gpu`) and `metrics` → `sim` → outputs
-//! (`run`, `output`, `bench`, `plot`) → the CLI.
+//! (`run`, `output`, `export`, `bench`, `plot`) → the CLI.
 #![warn(missing_docs)]
 
 pub mod atomic_file;
@@ -17,6 +17,7 @@ pub mod body;
 pub mod check;
 pub mod cpu;
 pub mod error;
+pub mod export;
 pub mod gpu;
 pub mod mesh;
 pub mod metrics;

@@ -195,6 +195,21 @@ impl TriMesh {
     }
 }
 
+/// Area-weighted vertex normals: each vertex sums the cross products of its triangles, so a
+/// larger triangle weighs more. Unnormalised (a vertex of no triangle gets zero); callers that
+/// need unit normals normalise.
+pub fn vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
+    let mut n = vec![Vec3::ZERO; positions.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let face = (b - a).cross(c - a);
+        for &i in t {
+            n[i as usize] += face;
+        }
+    }
+    n
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

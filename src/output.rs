@@ -1,35 +1,8 @@
-//! Result files: OBJ frames and `summary.json`, each written atomically (temp file, rename).
+//! `summary.json`, the run's report (the frame files are `export`'s).
 
 use crate::sim::Settled;
 use crate::solver::AdapterReport;
-use glam::{Vec2, Vec4};
 use serde::Serialize;
-use std::fmt::Write as _;
-
-/// A Wavefront OBJ of the cloth at one frame (positions in m).
-pub fn obj_text(positions: &[Vec4], triangles: &[[u32; 3]], uv: Option<&[Vec2]>) -> String {
-    let mut s = String::with_capacity(positions.len() * 40 + triangles.len() * 24);
-    s.push_str("# drapekit frame, units: m");
-    s.push_str(if uv.is_some() {
-        "; vt: pattern coordinates in m\n"
-    } else {
-        "\n"
-    });
-    for p in positions {
-        let _ = writeln!(s, "v {} {} {}", p.x, p.y, p.z);
-    }
-    for t in uv.unwrap_or_default() {
-        let _ = writeln!(s, "vt {} {}", t.x, t.y);
-    }
-    for t in triangles {
-        let [a, b, c] = t.map(|i| i + 1);
-        let _ = match uv {
-            Some(_) => writeln!(s, "f {a}/{a} {b}/{b} {c}/{c}"),
-            None => writeln!(s, "f {a} {b} {c}"),
-        };
-    }
-    s
-}
 
 /// `summary.json`. Field names are stable: later versions add fields, never rename them.
 #[derive(Clone, Debug, Serialize)]

@@ -3,9 +3,10 @@
 use crate::atomic_file::write_atomic;
 use crate::cpu::CpuSolver;
 use crate::error::Error;
+use crate::export::Exporter;
 use crate::gpu::{AdapterChoice, GpuContext, GpuSolver};
 use crate::model::layout::{INTEGRATOR_EXPLICIT, INTEGRATOR_IMPLICIT};
-use crate::output::{obj_text, Summary};
+use crate::output::Summary;
 use crate::preview::{render_frame, PreviewOptions};
 use crate::scene::Scene;
 use crate::sim::{prepare, simulate, Prepared, RunStats};
@@ -120,22 +121,13 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
 
     let mut outputs = Vec::new();
     let mut stats = RunStats::default();
-    let every = scene.output.every;
-    let uv = prep.garment.as_ref().map(|g| &g.uv[..]);
-    let write_frame = |frame: u32, positions: &[glam::Vec4]| -> Result<String, Error> {
-        let name = format!("frame_{frame:04}.obj");
-        write_atomic(
-            &out_dir.join(&name),
-            obj_text(positions, &prep.model.triangles, uv).as_bytes(),
-        )?;
-        Ok(name)
-    };
+    let mut exporter = Exporter::new(&prep, &scene.output, &out_dir);
     let bar = progress_bar(opts.progress, prep.frames);
     let particle_substeps = prep.model.len() as f64 * prep.substeps as f64;
     let started = std::time::Instant::now();
     let result = simulate(&prep, solver.as_mut(), &mut stats, |frame, state| {
-        if scene.output.obj && frame % every == 0 {
-            outputs.push(write_frame(frame, &state.positions)?);
+        if exporter.wants_frames() && exporter.on_schedule(frame) {
+            outputs.extend(exporter.frame(frame, &state.positions)?);
         }
         if frame > 0 {
             let rate = particle_substeps * frame as f64 / started.elapsed().as_secs_f64();
@@ -152,9 +144,11 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
     // frames (the settle rule, or a frame count that is not a multiple). The solver still
     // holds its positions.
     let last = stats.frames_run;
-    if result.is_ok() && scene.output.obj && last % every != 0 {
-        outputs.push(write_frame(last, &solver.state()?.positions)?);
+    if result.is_ok() && exporter.wants_frames() && !exporter.on_schedule(last) {
+        outputs.extend(exporter.frame(last, &solver.state()?.positions)?);
     }
+    // The caches hold the frames written so far, also when the run stopped early.
+    outputs.extend(exporter.finish()?);
     if result.is_ok() {
         outputs.extend(write_previews(
             &scene,

@@ -23,6 +23,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("sim", 7),
     ("run", 8),
     ("output", 8),
+    ("export", 8),
     ("bench", 8),
     ("bench_integrators", 8),
     ("plot", 8),

@@ -65,6 +65,12 @@ impl Motion {
         }
     }
 
+    /// Whether the body ever changes pose (keyframes that all agree hold it still).
+    pub fn moves(&self) -> bool {
+        (self.keys.windows(2))
+            .any(|w| w[0].rotation != w[1].rotation || w[0].translation != w[1].translation)
+    }
+
     /// The body's pose and velocity at time `t`.
     pub fn at(&self, t: f32) -> BodyState {
         let Some(first) = self.keys.first() else {

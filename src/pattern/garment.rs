@@ -67,6 +67,10 @@ pub struct Garment {
     pub seam_hinges: Vec<SeamHinge>,
     /// Each edge's label, per panel.
     pub edge_labels: Vec<Vec<Option<String>>>,
+    /// The panels' names, in pattern order.
+    pub panel_names: Vec<String>,
+    /// The panel (index into `panel_names`) of each triangle of `mesh`.
+    pub triangle_panel: Vec<u32>,
 }
 
 impl Garment {
@@ -111,6 +115,7 @@ impl Garment {
         let mut positions = Vec::new();
         let mut uv = Vec::new();
         let mut triangles = Vec::new();
+        let mut triangle_panel = Vec::new();
         let mut edge_particles: Vec<Vec<Vec<u32>>> = Vec::new();
         for (pi, panel) in pattern.panels.iter().enumerate() {
             let mut outline: Vec<DVec2> = Vec::new();
@@ -162,6 +167,7 @@ impl Garment {
             for t in &mesh.triangles {
                 let t = t.map(|v| v + base);
                 triangles.push(if flip { [t[0], t[2], t[1]] } else { t });
+                triangle_panel.push(pi as u32);
             }
             let n = outline.len();
             edge_particles.push(
@@ -230,6 +236,8 @@ impl Garment {
             edge_labels: (pattern.panels.iter())
                 .map(|p| p.edges.iter().map(|e| e.label.clone()).collect())
                 .collect(),
+            panel_names: pattern.panels.iter().map(|p| p.name.clone()).collect(),
+            triangle_panel,
         })
     }
 }

@@ -55,9 +55,10 @@ pub struct PreviewOptions {
     pub adapter: AdapterChoice,
 }
 
-/// Linear RGB of the cloth and the body.
-const FABRIC: Vec3 = Vec3::new(0.10, 0.28, 0.62);
-const BODY: Vec3 = Vec3::new(0.62, 0.60, 0.58);
+/// Linear RGB of the cloth (also its colour in the glTF export).
+pub const FABRIC: Vec3 = Vec3::new(0.10, 0.28, 0.62);
+/// Linear RGB of the body.
+pub const BODY: Vec3 = Vec3::new(0.62, 0.60, 0.58);
 
 fn bad(path: &Path, problem: impl Into<String>, fix: impl Into<String>) -> Error {
     Error::Input(InputError::new(path, "", problem, fix))

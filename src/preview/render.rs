@@ -22,15 +22,7 @@ pub struct DrawMesh {
 impl DrawMesh {
     /// Area-weighted vertex normals (unnormalised sums of the triangles' cross products).
     pub fn normals(&self) -> Vec<Vec3> {
-        let mut n = vec![Vec3::ZERO; self.positions.len()];
-        for t in &self.triangles {
-            let [a, b, c] = t.map(|i| self.positions[i as usize]);
-            let face = (b - a).cross(c - a);
-            for &i in t {
-                n[i as usize] += face;
-            }
-        }
-        n
+        crate::mesh::vertex_normals(&self.positions, &self.triangles)
     }
 }
 

@@ -254,6 +254,10 @@ pub(super) struct RawOutput {
     pub(super) previews: Vec<String>,
     #[serde(default = "default_preview_camera")]
     pub(super) preview_camera: String,
+    #[serde(default)]
+    pub(super) pc2: bool,
+    #[serde(default)]
+    pub(super) gltf: bool,
 }
 
 fn default_preview_camera() -> String {
@@ -268,6 +272,8 @@ impl Default for RawOutput {
             every: 1,
             previews: Vec::new(),
             preview_camera: default_preview_camera(),
+            pc2: false,
+            gltf: false,
         }
     }
 }

@@ -57,6 +57,10 @@ pub struct OutputSettings {
     pub previews: Vec<String>,
     /// The previews' camera preset.
     pub preview_camera: String,
+    /// Write the written frames as a PC2 point cache, `cloth.pc2`.
+    pub pc2: bool,
+    /// Write the written frames as an animated glTF binary, `garment.glb`.
+    pub gltf: bool,
 }
 
 /// Validates `[solver]`.
@@ -177,5 +181,7 @@ pub(super) fn parse_output(
                 ))
             }
         },
+        pc2: raw.pc2,
+        gltf: raw.gltf,
     })
 }

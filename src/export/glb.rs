@@ -1,0 +1,395 @@
+//! The animated glTF binary (`.glb`): the cloth's first written frame as the base mesh, one
+//! morph target per later frame (position and normal deltas), a weights animation that moves
+//! through them, and the body as a second node, posed or moved rigidly by its own channels.
+
+use super::obj::unit_normals;
+use crate::preview::{BODY, FABRIC};
+use animation::Property::{MorphTargetWeights as Weights, Rotation, Translation};
+use glam::{Quat, Vec2, Vec3, Vec4};
+use gltf_json as json;
+use json::validation::{Checked::Valid, USize64};
+use json::{accessor, animation, buffer, material, mesh, Index};
+use std::collections::BTreeMap;
+
+/// The cloth over time.
+#[derive(Clone, Copy, Debug)]
+pub struct ClothTrack<'a> {
+    /// Triangles over the particles.
+    pub triangles: &'a [[u32; 3]],
+    /// Pattern coordinates in m, for pattern scenes.
+    pub uv: Option<&'a [Vec2]>,
+    /// Each frame's time in s, increasing.
+    pub times: &'a [f32],
+    /// Each frame's positions in m (world).
+    pub frames: &'a [Vec<Vec3>],
+}
+
+/// The body: its mesh in its own frame and its rigid pose at each of the cloth's times (one
+/// pose when it never moves).
+#[derive(Clone, Debug)]
+pub struct BodyTrack<'a> {
+    /// Positions in the body frame, m.
+    pub positions: &'a [Vec3],
+    /// Triangles.
+    pub triangles: &'a [[u32; 3]],
+    /// Rotation and translation, body to world.
+    pub poses: Vec<(Quat, Vec3)>,
+}
+
+/// The `.glb` bytes, or `None` without frames, with frames of unequal length or times that do
+/// not match them, or past the format's 4 GiB.
+pub fn glb_bytes(cloth: &ClothTrack, body: Option<&BodyTrack>) -> Option<Vec<u8>> {
+    let base = cloth.frames.first()?;
+    let n = base.len();
+    if cloth.times.len() != cloth.frames.len() || cloth.frames.iter().any(|f| f.len() != n) {
+        return None;
+    }
+    let mut b = Builder::default();
+    b.root.asset.generator = Some(format!("drapekit {}", env!("CARGO_PKG_VERSION")));
+    let garment = b.cloth_mesh(cloth);
+    let mut nodes = vec![b.root.push(json::Node {
+        mesh: Some(garment),
+        name: Some("garment".into()),
+        ..node()
+    })];
+    let mut channels = Vec::new();
+    let mut samplers = Vec::new();
+    let later = cloth.frames.len() - 1;
+    if later > 0 {
+        // Frame 0 is the base (all weights 0); frame k sets target k − 1 to 1. Linear
+        // interpolation between neighbours blends two frames' positions linearly. Dense weights
+        // take 4·frames² bytes, less than the targets' 24·particles·frames until frames pass
+        // six times the particle count.
+        let mut weights = vec![0.0f32; cloth.frames.len() * later];
+        for k in 1..cloth.frames.len() {
+            weights[k * later + k - 1] = 1.0;
+        }
+        let input = b.scalars(cloth.times, true);
+        let output = b.scalars(&weights, false);
+        channels.push(b.channel(&mut samplers, input, output, nodes[0], Weights));
+    }
+    if let Some(body) = body {
+        let (rotation, translation) = *body.poses.first()?;
+        let mesh = b.body_mesh(body);
+        let node = b.root.push(json::Node {
+            mesh: Some(mesh),
+            name: Some("body".into()),
+            rotation: Some(json::scene::UnitQuaternion(rotation.to_array())),
+            translation: Some(translation.to_array()),
+            ..node()
+        });
+        nodes.push(node);
+        if body.poses.len() > 1 {
+            if body.poses.len() != cloth.times.len() {
+                return None;
+            }
+            // glTF slerps between neighbouring keys: keep each quaternion on the same side as
+            // the previous one so that the turn takes the short way, as the simulation's did.
+            let mut rotations: Vec<Quat> = body.poses.iter().map(|p| p.0).collect();
+            for k in 1..rotations.len() {
+                if rotations[k].dot(rotations[k - 1]) < 0.0 {
+                    rotations[k] = -rotations[k];
+                }
+            }
+            let input = b.scalars(cloth.times, true);
+            let flat: Vec<f32> = rotations.iter().flat_map(|q| q.to_array()).collect();
+            let r = b.accessor(&flat, rotations.len(), accessor::Type::Vec4, None, None);
+            let t: Vec<Vec3> = body.poses.iter().map(|p| p.1).collect();
+            let t = b.vec3s(&t, false, None);
+            channels.push(b.channel(&mut samplers, input, r, node, Rotation));
+            channels.push(b.channel(&mut samplers, input, t, node, Translation));
+        }
+    }
+    if !channels.is_empty() {
+        b.root.push(json::Animation {
+            channels,
+            samplers,
+            name: Some("drape".into()),
+            extensions: None,
+            extras: Default::default(),
+        });
+    }
+    let scene = b.root.push(json::Scene {
+        nodes,
+        name: Some("drapekit".into()),
+        extensions: None,
+        extras: Default::default(),
+    });
+    b.root.scene = Some(scene);
+    b.finish()
+}
+
+/// A node with nothing set.
+fn node() -> json::Node {
+    json::Node {
+        camera: None,
+        children: None,
+        extensions: None,
+        extras: Default::default(),
+        matrix: None,
+        mesh: None,
+        name: None,
+        rotation: None,
+        scale: None,
+        translation: None,
+        skin: None,
+        weights: None,
+    }
+}
+
+/// The glTF document and its binary chunk, filled together.
+#[derive(Default)]
+struct Builder {
+    root: json::Root,
+    bin: Vec<u8>,
+}
+
+impl Builder {
+    /// The cloth mesh: base frame, normals, pattern UVs, indices and the morph targets.
+    fn cloth_mesh(&mut self, cloth: &ClothTrack) -> Index<json::Mesh> {
+        let base = &cloth.frames[0];
+        let base_normals = unit_normals(base, cloth.triangles);
+        let mut attributes = BTreeMap::new();
+        let vertex = Some(buffer::Target::ArrayBuffer);
+        let positions = self.vec3s(base, true, vertex);
+        let normals = self.vec3s(&base_normals, false, vertex);
+        attributes.insert(Valid(mesh::Semantic::Positions), positions);
+        attributes.insert(Valid(mesh::Semantic::Normals), normals);
+        if let Some(uv) = cloth.uv.filter(|uv| uv.len() == base.len()) {
+            // glTF's texture origin is the top left, OBJ's the bottom left: v' = 1 − v keeps
+            // an image where the OBJ's vt put it.
+            let flipped: Vec<f32> = uv.iter().flat_map(|t| [t.x, 1.0 - t.y]).collect();
+            let uv = self.accessor(&flipped, uv.len(), accessor::Type::Vec2, None, vertex);
+            attributes.insert(Valid(mesh::Semantic::TexCoords(0)), uv);
+        }
+        let targets: Vec<mesh::MorphTarget> = (cloth.frames[1..].iter())
+            .map(|frame| {
+                let dp: Vec<Vec3> = frame.iter().zip(base).map(|(p, q)| *p - *q).collect();
+                let dn: Vec<Vec3> = (unit_normals(frame, cloth.triangles).iter())
+                    .zip(&base_normals)
+                    .map(|(n, m)| *n - *m)
+                    .collect();
+                mesh::MorphTarget {
+                    positions: Some(self.vec3s(&dp, true, vertex)),
+                    normals: Some(self.vec3s(&dn, false, vertex)),
+                    tangents: None,
+                }
+            })
+            .collect();
+        let material = self.material("fabric", FABRIC.extend(1.0), true);
+        let indices = self.indices(cloth.triangles);
+        let count = targets.len();
+        self.root.push(json::Mesh {
+            name: Some("garment".into()),
+            primitives: vec![primitive(attributes, indices, material, targets)],
+            weights: (count > 0).then(|| vec![0.0; count]),
+            extensions: None,
+            extras: Default::default(),
+        })
+    }
+
+    /// The body mesh in its own frame.
+    fn body_mesh(&mut self, body: &BodyTrack) -> Index<json::Mesh> {
+        let mut attributes = BTreeMap::new();
+        let target = Some(buffer::Target::ArrayBuffer);
+        let positions = self.vec3s(body.positions, true, target);
+        let normals = unit_normals(body.positions, body.triangles);
+        let normals = self.vec3s(&normals, false, target);
+        attributes.insert(Valid(mesh::Semantic::Positions), positions);
+        attributes.insert(Valid(mesh::Semantic::Normals), normals);
+        let material = self.material("body", BODY.extend(1.0), false);
+        let indices = self.indices(body.triangles);
+        self.root.push(json::Mesh {
+            name: Some("body".into()),
+            primitives: vec![primitive(attributes, indices, material, Vec::new())],
+            weights: None,
+            extensions: None,
+            extras: Default::default(),
+        })
+    }
+
+    /// A matte material; cloth is seen from both sides.
+    fn material(&mut self, name: &str, color: Vec4, two_sided: bool) -> Index<json::Material> {
+        let mut m = json::Material {
+            name: Some(name.into()),
+            double_sided: two_sided,
+            ..Default::default()
+        };
+        m.pbr_metallic_roughness.base_color_factor = material::PbrBaseColorFactor(color.to_array());
+        m.pbr_metallic_roughness.metallic_factor = material::StrengthFactor(0.0);
+        m.pbr_metallic_roughness.roughness_factor = material::StrengthFactor(0.9);
+        self.root.push(m)
+    }
+
+    /// Appends `bytes` (little endian, as glTF requires) as a buffer view, 4-byte aligned
+    /// (every component here is 4 bytes).
+    fn view(&mut self, bytes: &[u8], target: Option<buffer::Target>) -> Index<buffer::View> {
+        self.bin.resize(self.bin.len().next_multiple_of(4), 0);
+        let offset = self.bin.len();
+        self.bin.extend_from_slice(bytes);
+        self.root.push(buffer::View {
+            buffer: Index::new(0),
+            byte_length: USize64::from(bytes.len()),
+            byte_offset: Some(USize64::from(offset)),
+            byte_stride: None,
+            name: None,
+            target: target.map(Valid),
+            extensions: None,
+            extras: Default::default(),
+        })
+    }
+
+    /// An f32 accessor of `count` elements of `kind`.
+    fn accessor(
+        &mut self,
+        values: &[f32],
+        count: usize,
+        kind: accessor::Type,
+        bounds: Option<(json::Value, json::Value)>,
+        target: Option<buffer::Target>,
+    ) -> Index<json::Accessor> {
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let view = self.view(&bytes, target);
+        let (min, max) = bounds.unzip();
+        self.root.push(json::Accessor {
+            buffer_view: Some(view),
+            byte_offset: None,
+            count: USize64::from(count),
+            component_type: Valid(accessor::GenericComponentType(accessor::ComponentType::F32)),
+            type_: Valid(kind),
+            min,
+            max,
+            name: None,
+            normalized: false,
+            sparse: None,
+            extensions: None,
+            extras: Default::default(),
+        })
+    }
+
+    /// Vec3 data; `bounds` adds the min/max that glTF requires of positions.
+    fn vec3s(
+        &mut self,
+        v: &[Vec3],
+        bounds: bool,
+        target: Option<buffer::Target>,
+    ) -> Index<json::Accessor> {
+        let bounds = bounds.then(|| {
+            let lo = v.iter().copied().reduce(Vec3::min).unwrap_or_default();
+            let hi = v.iter().copied().reduce(Vec3::max).unwrap_or_default();
+            (
+                json::Value::from(lo.to_array().to_vec()),
+                hi.to_array().to_vec().into(),
+            )
+        });
+        let flat: Vec<f32> = v.iter().flat_map(|p| p.to_array()).collect();
+        self.accessor(&flat, v.len(), accessor::Type::Vec3, bounds, target)
+    }
+
+    /// Scalars; `bounds` adds the min/max that glTF requires of animation times.
+    fn scalars(&mut self, v: &[f32], bounds: bool) -> Index<json::Accessor> {
+        let bounds = bounds.then(|| {
+            let lo = v.iter().copied().fold(f32::INFINITY, f32::min);
+            let hi = v.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            (vec![lo].into(), vec![hi].into())
+        });
+        self.accessor(v, v.len(), accessor::Type::Scalar, bounds, None)
+    }
+
+    /// Triangle indices as u32.
+    fn indices(&mut self, triangles: &[[u32; 3]]) -> Index<json::Accessor> {
+        let bytes: Vec<u8> = triangles
+            .iter()
+            .flatten()
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
+        let view = self.view(&bytes, Some(buffer::Target::ElementArrayBuffer));
+        self.root.push(json::Accessor {
+            buffer_view: Some(view),
+            byte_offset: None,
+            count: USize64::from(3 * triangles.len()),
+            component_type: Valid(accessor::GenericComponentType(accessor::ComponentType::U32)),
+            type_: Valid(accessor::Type::Scalar),
+            min: None,
+            max: None,
+            name: None,
+            normalized: false,
+            sparse: None,
+            extensions: None,
+            extras: Default::default(),
+        })
+    }
+
+    /// A linear sampler from `input` times to `output` values, driving `path` of `node`.
+    fn channel(
+        &mut self,
+        samplers: &mut Vec<animation::Sampler>,
+        input: Index<json::Accessor>,
+        output: Index<json::Accessor>,
+        node: Index<json::Node>,
+        path: animation::Property,
+    ) -> animation::Channel {
+        samplers.push(animation::Sampler {
+            input,
+            interpolation: Valid(animation::Interpolation::Linear),
+            output,
+            extensions: None,
+            extras: Default::default(),
+        });
+        animation::Channel {
+            sampler: Index::new(samplers.len() as u32 - 1),
+            target: animation::Target {
+                node,
+                path: Valid(path),
+                extensions: None,
+                extras: Default::default(),
+            },
+            extensions: None,
+            extras: Default::default(),
+        }
+    }
+
+    /// The GLB container: a 12-byte header, the JSON chunk (padded with spaces) and the binary
+    /// chunk (padded with zeros), each 4-byte aligned.
+    fn finish(mut self) -> Option<Vec<u8>> {
+        self.bin.resize(self.bin.len().next_multiple_of(4), 0);
+        self.root.push(json::Buffer {
+            byte_length: USize64::from(self.bin.len()),
+            name: None,
+            uri: None,
+            extensions: None,
+            extras: Default::default(),
+        });
+        let mut text = self.root.to_vec().ok()?;
+        text.resize(text.len().next_multiple_of(4), b' ');
+        let total = u32::try_from(12 + 8 + text.len() + 8 + self.bin.len()).ok()?;
+        let mut out = Vec::with_capacity(total as usize);
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&total.to_le_bytes());
+        for (kind, chunk) in [(b"JSON", &text), (b"BIN\0", &self.bin)] {
+            out.extend_from_slice(&(chunk.len() as u32).to_le_bytes());
+            out.extend_from_slice(kind);
+            out.extend_from_slice(chunk);
+        }
+        Some(out)
+    }
+}
+
+/// A triangle-list primitive.
+fn primitive(
+    attributes: BTreeMap<json::validation::Checked<mesh::Semantic>, Index<json::Accessor>>,
+    indices: Index<json::Accessor>,
+    material: Index<json::Material>,
+    targets: Vec<mesh::MorphTarget>,
+) -> mesh::Primitive {
+    mesh::Primitive {
+        attributes,
+        indices: Some(indices),
+        material: Some(material),
+        mode: Valid(mesh::Mode::Triangles),
+        targets: (!targets.is_empty()).then_some(targets),
+        extensions: None,
+        extras: Default::default(),
+    }
+}

@@ -1,0 +1,173 @@
+//! What a run writes of its frames: an OBJ per written frame (smooth normals, a group per
+//! panel), the body beside them, a PC2 point cache and an animated glTF binary. The last two
+//! need every written frame, so they are kept in memory and written at the end.
+
+pub mod glb;
+pub mod obj;
+pub mod pc2;
+
+use crate::atomic_file::write_atomic;
+use crate::body::Collider;
+use crate::error::Error;
+use crate::scene::OutputSettings;
+use crate::sim::Prepared;
+use glam::{Vec2, Vec3, Vec4};
+use obj::Group;
+use std::path::{Path, PathBuf};
+
+/// The point cache's file name.
+pub const PC2_FILE: &str = "cloth.pc2";
+/// The glTF binary's file name.
+pub const GLB_FILE: &str = "garment.glb";
+
+/// Writes a run's frames as they come and its caches at the end.
+pub struct Exporter<'a> {
+    dir: PathBuf,
+    settings: OutputSettings,
+    frame_dt: f32,
+    triangles: &'a [[u32; 3]],
+    uv: Option<&'a [Vec2]>,
+    groups: Vec<Group>,
+    body: Option<&'a Collider>,
+    /// The written frames' numbers and positions, kept for the PC2 and glTF files.
+    kept_frames: Vec<u32>,
+    kept: Vec<Vec<Vec3>>,
+    written: usize,
+}
+
+impl<'a> Exporter<'a> {
+    /// An exporter of `prep`'s cloth and body into `dir`, as `output` asks.
+    pub fn new(prep: &'a Prepared, output: &OutputSettings, dir: &Path) -> Self {
+        let triangles = &prep.model.triangles[..];
+        let groups = match &prep.garment {
+            Some(g) => obj::panel_groups(&g.panel_names, &g.triangle_panel),
+            None => vec![Group {
+                name: "cloth".into(),
+                triangles: (0..triangles.len() as u32).collect(),
+            }],
+        };
+        Exporter {
+            dir: dir.to_path_buf(),
+            settings: output.clone(),
+            frame_dt: prep.frame_dt,
+            triangles,
+            uv: prep.garment.as_ref().map(|g| &g.uv[..]),
+            groups,
+            body: prep.model.collider.as_deref(),
+            kept_frames: Vec::new(),
+            kept: Vec::new(),
+            written: 0,
+        }
+    }
+
+    /// Whether any file is written per frame (if not, no frame needs reading back).
+    pub fn wants_frames(&self) -> bool {
+        self.settings.obj || self.settings.pc2 || self.settings.gltf
+    }
+
+    /// Whether `frame` is on the `every` schedule.
+    pub fn on_schedule(&self, frame: u32) -> bool {
+        frame.is_multiple_of(self.settings.every)
+    }
+
+    /// Writes (or keeps) one frame and returns the names of the files written.
+    pub fn frame(&mut self, frame: u32, positions: &[Vec4]) -> Result<Vec<String>, Error> {
+        let positions: Vec<Vec3> = positions.iter().map(|p| p.truncate()).collect();
+        let mut names = Vec::new();
+        if self.settings.obj {
+            let name = format!("frame_{frame:04}.obj");
+            let text = obj::cloth_obj(&positions, self.triangles, self.uv, &self.groups);
+            self.write(&name, text.as_bytes())?;
+            names.push(name);
+            if let Some(c) = self.body {
+                let name = if c.motion.moves() {
+                    Some(format!("body_{frame:04}.obj"))
+                } else {
+                    (self.written == 0).then(|| "body.obj".to_string())
+                };
+                if let Some(name) = name {
+                    let world = self.body_world(c, frame);
+                    self.write(
+                        &name,
+                        obj::body_obj(&world, &c.body.mesh.triangles).as_bytes(),
+                    )?;
+                    names.push(name);
+                }
+            }
+        }
+        if self.settings.pc2 || self.settings.gltf {
+            self.kept_frames.push(frame);
+            self.kept.push(positions);
+        }
+        self.written += 1;
+        Ok(names)
+    }
+
+    /// Writes the point cache and the glTF binary of the frames seen so far (also after a run
+    /// that stopped early) and returns their names.
+    pub fn finish(&self) -> Result<Vec<String>, Error> {
+        let mut names = Vec::new();
+        if self.kept.is_empty() {
+            return Ok(names);
+        }
+        if self.settings.pc2 {
+            // Samples are `every` frames apart from the first; a last frame written between
+            // them (the settle rule) takes the next slot.
+            let start = self.kept_frames[0] as f32;
+            let bytes = pc2::pc2_bytes(&self.kept, start, self.settings.every as f32)
+                .ok_or_else(|| self.too_large(PC2_FILE))?;
+            self.write(PC2_FILE, &bytes)?;
+            names.push(PC2_FILE.to_string());
+        }
+        if self.settings.gltf {
+            let times: Vec<f32> = (self.kept_frames.iter())
+                .map(|&f| f as f32 * self.frame_dt)
+                .collect();
+            let cloth = glb::ClothTrack {
+                triangles: self.triangles,
+                uv: self.uv,
+                times: &times,
+                frames: &self.kept,
+            };
+            let body = self.body.map(|c| glb::BodyTrack {
+                positions: &c.body.mesh.positions,
+                triangles: &c.body.mesh.triangles,
+                poses: if c.motion.moves() {
+                    let pose = |t: f32| c.motion.at(t);
+                    times
+                        .iter()
+                        .map(|&t| (pose(t).rotation, pose(t).translation))
+                        .collect()
+                } else {
+                    let still = c.motion.at(0.0);
+                    vec![(still.rotation, still.translation)]
+                },
+            });
+            let bytes =
+                glb::glb_bytes(&cloth, body.as_ref()).ok_or_else(|| self.too_large(GLB_FILE))?;
+            self.write(GLB_FILE, &bytes)?;
+            names.push(GLB_FILE.to_string());
+        }
+        Ok(names)
+    }
+
+    /// The body's vertices in world coordinates at `frame`'s time.
+    fn body_world(&self, c: &Collider, frame: u32) -> Vec<Vec3> {
+        let pose = c.motion.at(frame as f32 * self.frame_dt);
+        (c.body.mesh.positions.iter())
+            .map(|p| pose.rotation * *p + pose.translation)
+            .collect()
+    }
+
+    fn write(&self, name: &str, bytes: &[u8]) -> Result<(), Error> {
+        write_atomic(&self.dir.join(name), bytes)
+    }
+
+    /// The only way the encoders refuse consistent frames: counts past their 32-bit fields.
+    fn too_large(&self, name: &str) -> Error {
+        Error::io(
+            &self.dir.join(name),
+            std::io::Error::other("the run is too large for the format's 32-bit sizes"),
+        )
+    }
+}

@@ -1,0 +1,343 @@
+//! Exports read back: OBJ frames (normals, panel groups), the body beside them, the PC2 point
+//! cache and the animated glTF binary, from short CPU runs of shipped scenes.
+
+mod common;
+
+use drapekit::body::motion::Motion;
+use drapekit::gpu::AdapterChoice;
+use drapekit::run::{run_scene, BackendChoice, RunOptions};
+use drapekit::scene::Scene;
+use drapekit::sim::prepare;
+use glam::{Quat, Vec3};
+use std::path::{Path, PathBuf};
+
+fn out_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("drapekit-exports-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn options(out: &Path, frames: u32) -> RunOptions {
+    RunOptions {
+        backend: BackendChoice::Cpu,
+        adapter: AdapterChoice::Fallback,
+        out_dir: Some(out.to_path_buf()),
+        frames: Some(frames),
+        progress: false,
+    }
+}
+
+/// An OBJ as written: `v`, `vn`, `vt`, the groups in order with their faces' fields.
+#[derive(Default)]
+struct Obj {
+    v: Vec<Vec3>,
+    vn: Vec<Vec3>,
+    vt: usize,
+    groups: Vec<(String, Vec<[String; 3]>)>,
+}
+
+fn read_obj(path: &Path) -> Obj {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut obj = Obj::default();
+    let vec3 = |rest: &str| {
+        let c: Vec<f32> = rest.split(' ').map(|x| x.parse().unwrap()).collect();
+        Vec3::new(c[0], c[1], c[2])
+    };
+    for line in text.lines() {
+        match line.split_once(' ') {
+            Some(("v", rest)) => obj.v.push(vec3(rest)),
+            Some(("vn", rest)) => obj.vn.push(vec3(rest)),
+            Some(("vt", _)) => obj.vt += 1,
+            Some(("g", name)) => obj.groups.push((name.to_string(), Vec::new())),
+            Some(("f", rest)) => {
+                let f: Vec<String> = rest.split(' ').map(String::from).collect();
+                obj.groups
+                    .last_mut()
+                    .expect("faces follow a group")
+                    .1
+                    .push(<[String; 3]>::try_from(f).expect("triangles"));
+            }
+            _ => {}
+        }
+    }
+    obj
+}
+
+/// Header fields and samples of a PC2 file.
+fn read_pc2(path: &Path) -> (i32, f32, f32, Vec<Vec<Vec3>>) {
+    let b = std::fs::read(path).unwrap();
+    assert_eq!(&b[..12], b"POINTCACHE2\0");
+    let word = |at: usize| <[u8; 4]>::try_from(&b[at..at + 4]).unwrap();
+    assert_eq!(i32::from_le_bytes(word(12)), 1, "version");
+    let points = i32::from_le_bytes(word(16)) as usize;
+    let (start, rate) = (f32::from_le_bytes(word(20)), f32::from_le_bytes(word(24)));
+    let samples = i32::from_le_bytes(word(28));
+    assert_eq!(
+        b.len(),
+        32 + 12 * points * samples as usize,
+        "size from the header"
+    );
+    let f = |at: usize| f32::from_le_bytes(word(at));
+    let data = (0..samples as usize)
+        .map(|s| {
+            (0..points)
+                .map(|i| {
+                    let at = 32 + 12 * (s * points + i);
+                    Vec3::new(f(at), f(at + 4), f(at + 8))
+                })
+                .collect()
+        })
+        .collect();
+    (samples, start, rate, data)
+}
+
+fn outputs(out: &Path) -> Vec<String> {
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let names: Vec<String> = (summary["outputs"].as_array().unwrap().iter())
+        .map(|v| v.as_str().unwrap().to_string())
+        .collect();
+    for n in &names {
+        assert!(out.join(n).is_file(), "{n} listed but missing");
+    }
+    names
+}
+
+#[test]
+fn skirt_on_a_turning_body_exports_obj_body_pc2_and_glb() {
+    // The shipped scene asks for pc2 and gltf. Its body turns from 1.5 s; turning from the
+    // start lets 5 frames (a few seconds of CPU) see it move. Every 2nd frame: 0, 2, 4 and the
+    // last, 5, off the schedule.
+    let mut scene = Scene::load(&common::fixture("scenes/skirt_rotating_implicit.toml")).unwrap();
+    assert!(scene.output.pc2 && scene.output.gltf);
+    let body = scene.body.as_mut().unwrap();
+    body.motion = Motion::turn_right_left(60.0, 1.0, 0.0);
+    scene.output.every = 2;
+    let out = out_dir("skirt");
+    run_scene(&scene, &options(&out, 5)).unwrap();
+    let prep = prepare(&scene).unwrap();
+    let garment = prep.garment.as_ref().unwrap();
+    let written = [0u32, 2, 4, 5];
+    let names = outputs(&out);
+    for f in written {
+        for name in [format!("frame_{f:04}.obj"), format!("body_{f:04}.obj")] {
+            assert!(names.contains(&name), "{name} not in {names:?}");
+        }
+    }
+    assert!(names.contains(&"cloth.pc2".into()) && names.contains(&"garment.glb".into()));
+    assert!(
+        !out.join("body.obj").exists(),
+        "a moving body is written per frame"
+    );
+
+    // OBJ: one vn and one vt per particle, a group per panel holding that panel's triangles,
+    // faces v/vt/vn with one index.
+    let frames: Vec<Obj> = (written.iter())
+        .map(|f| read_obj(&out.join(format!("frame_{f:04}.obj"))))
+        .collect();
+    let n = prep.model.len();
+    let last = &frames[3];
+    assert_eq!((last.v.len(), last.vn.len(), last.vt), (n, n, n));
+    let group_names: Vec<&str> = last.groups.iter().map(|g| g.0.as_str()).collect();
+    assert_eq!(group_names, garment.panel_names);
+    let mut faces = 0;
+    for (p, (_, fs)) in last.groups.iter().enumerate() {
+        for f in fs {
+            let idx: Vec<u32> = (f.iter())
+                .map(|c| {
+                    let parts: Vec<&str> = c.split('/').collect();
+                    assert!(
+                        parts.len() == 3 && parts.iter().all(|x| *x == parts[0]),
+                        "{c}"
+                    );
+                    parts[0].parse::<u32>().unwrap() - 1
+                })
+                .collect();
+            assert_eq!(idx, prep.model.triangles[faces], "faces in triangle order");
+            assert_eq!(garment.triangle_panel[faces], p as u32);
+            faces += 1;
+        }
+    }
+    assert_eq!(faces, prep.model.triangles.len());
+    // Unit normals, written to f32's shortest exact digits, so within f32 rounding of 1.
+    assert!(last.vn.iter().all(|v| (v.length() - 1.0).abs() < 1e-6));
+
+    // Body: world coordinates at each frame's time (frame × frame length, as the run loop
+    // times frames); the same f32 arithmetic and exact printing give the very same numbers.
+    let c = prep.model.collider.as_ref().unwrap();
+    let time = |f: u32| f as f32 * prep.frame_dt;
+    for f in written {
+        let pose = c.motion.at(time(f));
+        let body = read_obj(&out.join(format!("body_{f:04}.obj")));
+        let expected: Vec<Vec3> = (c.body.mesh.positions.iter())
+            .map(|p| pose.rotation * *p + pose.translation)
+            .collect();
+        assert!(body.v == expected, "body at frame {f}");
+        assert_eq!(body.groups[0].1.len(), c.body.mesh.triangles.len());
+    }
+    // The control: it did turn (12.5° by frame 5), so a static body would fail the above.
+    let first = read_obj(&out.join("body_0000.obj")).v;
+    let moved = read_obj(&out.join("body_0005.obj")).v;
+    let most = first.iter().zip(&moved).map(|(a, b)| a.distance(*b));
+    assert!(most.fold(0.0, f32::max) > 0.01);
+
+    // PC2: one sample per written frame, equal to the OBJ frame (both hold the f32 exactly).
+    let (samples, start, rate, data) = read_pc2(&out.join("cloth.pc2"));
+    assert_eq!((samples, start, rate), (4, 0.0, 2.0));
+    for (k, frame) in frames.iter().enumerate() {
+        assert!(data[k] == frame.v, "sample {k}");
+    }
+
+    // glTF: parses and validates, and reproduces the OBJ frames.
+    let times: Vec<f32> = written.iter().map(|&f| time(f)).collect();
+    let glb = check_glb(
+        &out.join("garment.glb"),
+        &frames,
+        &prep.model.triangles,
+        &times,
+    );
+    let uv = glb.uv.expect("pattern coordinates");
+    for (t, g) in uv.iter().zip(&garment.uv) {
+        assert_eq!(*t, [g.x, 1.0 - g.y], "v flipped to glTF's top-left origin");
+    }
+    // The body node turns with the body: a rotation key per written frame, equal to the
+    // simulation's pose up to sign (q and −q are one rotation).
+    let rotations = glb.body_rotations.expect("an animated body");
+    assert_eq!(rotations.len(), written.len());
+    for (r, f) in rotations.iter().zip(written) {
+        let pose = c.motion.at(time(f)).rotation;
+        let r = Quat::from_array(*r);
+        assert!(r.dot(pose).abs() > 1.0 - 1e-6, "frame {f}: {r} vs {pose}");
+    }
+}
+
+#[test]
+fn a_grid_on_a_still_body_writes_one_body_and_a_cloth_group() {
+    let mut scene = Scene::load(&common::fixture("scenes/drape_sphere.toml")).unwrap();
+    scene.output.every = 1;
+    scene.output.gltf = true;
+    let out = out_dir("sphere");
+    run_scene(&scene, &options(&out, 2)).unwrap();
+    let names = outputs(&out);
+    assert!(names.contains(&"body.obj".into()) && names.contains(&"garment.glb".into()));
+    assert!(!names.iter().any(|n| n.starts_with("body_")), "{names:?}");
+    assert!(
+        !names.contains(&"cloth.pc2".into()),
+        "pc2 is off by default"
+    );
+    let frames: Vec<Obj> = (0..=2)
+        .map(|f| read_obj(&out.join(format!("frame_{f:04}.obj"))))
+        .collect();
+    let f = &frames[2];
+    assert_eq!(f.vt, 0);
+    assert_eq!(f.groups.len(), 1);
+    assert_eq!(f.groups[0].0, "cloth");
+    assert!(f.groups[0].1.iter().flatten().all(|c| c.contains("//")));
+    let prep = prepare(&scene).unwrap();
+    let times = [0.0, prep.frame_dt, 2.0 * prep.frame_dt];
+    let glb = check_glb(
+        &out.join("garment.glb"),
+        &frames,
+        &prep.model.triangles,
+        &times,
+    );
+    assert!(glb.uv.is_none());
+    assert!(glb.body_rotations.is_none(), "a still body has no channels");
+}
+
+#[test]
+fn a_run_that_explodes_keeps_its_frames_in_the_point_cache() {
+    // The hanging cloth at one substep per frame, ~200× past its stable step, blows up; the
+    // cache holds every frame before the bad one.
+    let mut scene = Scene::load(&common::fixture("scenes/hanging_cloth.toml")).unwrap();
+    scene.solver.substeps = Some(1);
+    scene.output.pc2 = true;
+    let out = out_dir("explodes");
+    assert!(run_scene(&scene, &options(&out, 72)).is_err());
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let good = summary["frames"].as_u64().unwrap() as usize;
+    assert!(summary["error"].is_string() && good < 72, "{summary:#}");
+    assert!(outputs(&out).contains(&"cloth.pc2".into()));
+    let (samples, _, _, data) = read_pc2(&out.join("cloth.pc2"));
+    assert_eq!(samples as usize, good + 1, "frames 0..={good}");
+    let last = read_obj(&out.join(format!("frame_{good:04}.obj")));
+    assert!(
+        data[good] == last.v,
+        "the last sample is the last good frame"
+    );
+}
+
+/// What `check_glb` read beyond its own assertions.
+struct Glb {
+    uv: Option<Vec<[f32; 2]>>,
+    body_rotations: Option<Vec<[f32; 4]>>,
+}
+
+/// Parses and validates `path` with the `gltf` crate and checks the garment against the OBJ
+/// `frames` written at `times`: base mesh, indices, one morph target per later frame, and a
+/// weights animation that selects target k − 1 at frame k.
+fn check_glb(path: &Path, frames: &[Obj], triangles: &[[u32; 3]], times: &[f32]) -> Glb {
+    use gltf::animation::util::{MorphTargetWeights, ReadOutputs, Rotations};
+    let gltf = gltf::Gltf::from_slice(&std::fs::read(path).unwrap()).expect("a valid glb");
+    let blob = gltf.blob.as_deref();
+    let buffers = |_: gltf::Buffer| blob;
+    let node = |name: &str| gltf.nodes().find(|n| n.name() == Some(name));
+    let garment = node("garment").expect("a garment node");
+    let prim = garment.mesh().unwrap().primitives().next().unwrap();
+    let reader = prim.reader(buffers);
+    let base: Vec<Vec3> = reader.read_positions().unwrap().map(Vec3::from).collect();
+    assert!(base == frames[0].v, "the base mesh is the first frame");
+    assert_eq!(reader.read_normals().unwrap().count(), base.len());
+    let indices: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+    assert_eq!(
+        indices,
+        triangles.iter().flatten().copied().collect::<Vec<_>>()
+    );
+    let targets: Vec<Vec<Vec3>> = (reader.read_morph_targets())
+        .map(|(p, _, _)| p.unwrap().map(Vec3::from).collect())
+        .collect();
+    assert_eq!(targets.len(), frames.len() - 1);
+    for (k, target) in targets.iter().enumerate() {
+        let frame = &frames[k + 1].v;
+        for ((d, b), p) in target.iter().zip(&base).zip(frame) {
+            // The delta is p − b rounded once to f32 and a viewer adds it back with one more
+            // rounding: half an ulp of |p − b| ≤ 2·max(|p|, |b|) plus half an ulp of |p|, at
+            // most 1.5·ε·max(|p|, |b|) per coordinate; 2ε leaves a margin.
+            let tol = 2.0 * f32::EPSILON * b.abs().max(p.abs());
+            let err = (*b + *d - *p).abs();
+            assert!(err.cmple(tol).all(), "frame {}: {err} > {tol}", k + 1);
+        }
+    }
+    let anim = gltf.animations().next().expect("an animation");
+    let weights = anim
+        .channels()
+        .find(|c| c.target().property() == gltf::animation::Property::MorphTargetWeights)
+        .expect("a weights channel");
+    let r = weights.reader(buffers);
+    assert_eq!(r.read_inputs().unwrap().collect::<Vec<_>>(), times);
+    let Some(ReadOutputs::MorphTargetWeights(MorphTargetWeights::F32(w))) = r.read_outputs() else {
+        panic!("f32 weights")
+    };
+    let w: Vec<f32> = w.collect();
+    let n = targets.len();
+    assert_eq!(w.len(), n * frames.len());
+    for (k, row) in w.chunks(n).enumerate() {
+        let hot: Vec<usize> = (0..n).filter(|&i| row[i] != 0.0).collect();
+        let expect = if k == 0 { vec![] } else { vec![k - 1] };
+        assert_eq!(hot, expect, "weights at frame {k}");
+        assert!(hot.iter().all(|&i| row[i] == 1.0));
+    }
+    let uv = (reader.read_tex_coords(0)).map(|t| t.into_f32().collect());
+    let body = node("body").expect("a body node");
+    let body_rotations = (anim.channels())
+        .find(|c| {
+            c.target().node().index() == body.index()
+                && c.target().property() == gltf::animation::Property::Rotation
+        })
+        .map(|c| match c.reader(buffers).read_outputs() {
+            Some(ReadOutputs::Rotations(Rotations::F32(r))) => r.collect(),
+            _ => panic!("f32 rotations"),
+        });
+    Glb { uv, body_rotations }
+}
