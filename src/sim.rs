@@ -76,12 +76,22 @@ impl Prepared {
             .map_or(BodyState::REST, |c| c.motion.at(t))
     }
 
-    /// "particle i (panel p, pattern point (u, v) m)" for error messages: where to look.
+    /// "particle i (panel 'p', pattern point (u, v) m)" for error messages: where to look.
     pub fn describe_particle(&self, i: u32) -> String {
         match &self.garment {
             Some(g) if (i as usize) < g.uv.len() => {
                 let uv = g.uv[i as usize];
-                format!("particle {i} (pattern point ({:.3}, {:.3}) m)", uv.x, uv.y)
+                // A particle lies in one panel: the panel of any triangle that uses it.
+                let panel = (g.mesh.triangles.iter().zip(&g.triangle_panel))
+                    .find(|(t, _)| t.contains(&i))
+                    .and_then(|(_, &p)| g.panel_names.get(p as usize));
+                match panel {
+                    Some(name) => format!(
+                        "particle {i} (panel '{name}', pattern point ({:.3}, {:.3}) m)",
+                        uv.x, uv.y
+                    ),
+                    None => format!("particle {i} (pattern point ({:.3}, {:.3}) m)", uv.x, uv.y),
+                }
             }
             _ => {
                 let p = self
@@ -436,11 +446,10 @@ pub fn simulate(
         solver.advance(&steps)?;
         // The monitor stage checks the frame on the device before anything is read back.
         let health = solver.health()?;
-        let substeps = format!(
-            "substeps {}–{}",
-            (frame - 1) * prep.substeps + 1,
-            frame * prep.substeps
-        );
+        let substeps = match ((frame - 1) * prep.substeps + 1, frame * prep.substeps) {
+            (a, b) if a == b => format!("substep {a}"),
+            (a, b) => format!("substeps {a}–{b}"),
+        };
         if let Some(i) = health.first_non_finite {
             stats.finite = false;
             return Err(Error::Unstable(format!(

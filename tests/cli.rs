@@ -183,6 +183,11 @@ fn an_exploded_frame_stops_the_run_and_is_not_written() {
         stderr.contains("exploded") && stderr.contains("max_strain"),
         "{stderr}"
     );
+    // The monitor names where: the substeps and the worst particle.
+    assert!(
+        stderr.contains("substeps ") && stderr.contains("a spring at particle "),
+        "{stderr}"
+    );
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
     assert!(summary["max_edge_strain"].as_f64().unwrap() <= 5.0);
