@@ -207,7 +207,10 @@ pub(super) struct RawSolver {
 
 /// `strain_limit = 0.1`, or `true` (the default limit) / `false` (off).
 #[derive(Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "strain_limit takes a strain such as 0.1 (10%), true (the default) or false (off)"
+)]
 pub(super) enum RawStrainLimit {
     Switch(bool),
     Limit(f64),

@@ -122,7 +122,7 @@ pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings,
                 "strain_limit",
                 v,
                 (1e-3, 10.0),
-                "(strain: 0.1 = 10%)",
+                "(as a fraction: 0.1 = 10%)",
             )?),
         },
         strain_limit_iterations: c.count(
