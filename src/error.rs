@@ -16,6 +16,14 @@ pub enum Error {
     /// The GPU backend could not be created or failed while running.
     #[error("GPU backend: {0}")]
     Gpu(String),
+    /// The user interrupted the run (Ctrl-C); a checkpoint holds everything up to `frame`.
+    #[error("interrupted after frame {frame}; continue with: drapekit resume {}", dir.display())]
+    Interrupted {
+        /// The last completed frame.
+        frame: u32,
+        /// The output folder holding the checkpoint.
+        dir: PathBuf,
+    },
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
     Io {
@@ -27,11 +35,13 @@ pub enum Error {
 }
 
 impl Error {
-    /// Process exit code for this error: 2 for bad input, 3 for an unstable run, 1 otherwise.
+    /// Process exit code for this error: 2 for bad input, 3 for an unstable run, 130 for an
+    /// interrupted one (the shell's code for SIGINT), 1 otherwise.
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Input(_) => 2,
             Error::Unstable(_) => 3,
+            Error::Interrupted { .. } => 130,
             Error::Gpu(_) | Error::Io { .. } => 1,
         }
     }

@@ -15,6 +15,7 @@ pub mod bench;
 pub mod bench_integrators;
 pub mod body;
 pub mod check;
+pub mod checkpoint;
 pub mod cpu;
 pub mod error;
 pub mod export;

@@ -40,6 +40,21 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Write checkpoint.bin every N frames (Ctrl-C always writes one); continue with
+        /// `drapekit resume OUT`.
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+        checkpoint_every: Option<u32>,
+    },
+    /// Continue a run from the checkpoint in its output folder (same scene, backend, adapter).
+    Resume {
+        /// The run's output folder (holding checkpoint.bin).
+        dir: PathBuf,
+        /// Run to this many output frames instead of the original count.
+        #[arg(long)]
+        frames: Option<u32>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
     },
     /// List the GPU adapters, the one `--adapter auto` picks, and the CPU.
     Info,
@@ -139,6 +154,7 @@ fn execute(command: Command) -> Result<(), Error> {
             adapter,
             frames,
             quiet,
+            checkpoint_every,
         } => {
             let scene = Scene::load(&scene)?;
             let opts = RunOptions {
@@ -147,34 +163,18 @@ fn execute(command: Command) -> Result<(), Error> {
                 out_dir: out.clone(),
                 frames,
                 progress: !quiet,
+                checkpoint_every,
             };
             let out_dir = out.unwrap_or_else(|| scene.output.dir.clone());
+            stop_on_ctrl_c();
             let summary = run_scene(&scene, &opts)?;
-            let device = summary
-                .adapter
-                .as_ref()
-                .map_or("single-threaded CPU".to_string(), |a| {
-                    format!("{} ({}, {})", a.name, a.backend, a.device_type)
-                });
-            println!(
-                "simulated {:.2} s ({} frames × {} substeps, {}) on the {} backend [{}] in {:.2} s: {:.3e} particle-substeps/s",
-                summary.simulated_seconds,
-                summary.frames,
-                summary.substeps_per_frame,
-                summary.integrator,
-                summary.backend,
-                device,
-                summary.wall_seconds,
-                summary.particle_substeps_per_second
-            );
-            if let Some(s) = &summary.settled {
-                println!("settled at frame {} ({})", s.frame, s.rule);
-            }
-            println!(
-                "wrote {} files to {}",
-                summary.outputs.len(),
-                out_dir.display()
-            );
+            report(&summary, &out_dir);
+            Ok(())
+        }
+        Command::Resume { dir, frames, quiet } => {
+            stop_on_ctrl_c();
+            let summary = drapekit::run::resume_run(&dir, frames, !quiet)?;
+            report(&summary, &dir);
             Ok(())
         }
         Command::Info => {
@@ -279,5 +279,48 @@ fn execute(command: Command) -> Result<(), Error> {
             adapter,
             ..
         } => drapekit::bench::run_cli(&sizes, substeps, repeats, &out, &adapter),
+    }
+}
+
+/// The lines `run` and `resume` print when they finish.
+fn report(summary: &drapekit::output::Summary, out_dir: &std::path::Path) {
+    let device = summary
+        .adapter
+        .as_ref()
+        .map_or("single-threaded CPU".to_string(), |a| {
+            format!("{} ({}, {})", a.name, a.backend, a.device_type)
+        });
+    println!(
+        "simulated {:.2} s ({} frames × {} substeps, {}) on the {} backend [{}] in {:.2} s: {:.3e} particle-substeps/s",
+        summary.simulated_seconds,
+        summary.frames,
+        summary.substeps_per_frame,
+        summary.integrator,
+        summary.backend,
+        device,
+        summary.wall_seconds,
+        summary.particle_substeps_per_second
+    );
+    if let Some(s) = &summary.settled {
+        println!("settled at frame {} ({})", s.frame, s.rule);
+    }
+    println!(
+        "wrote {} files to {}",
+        summary.outputs.len(),
+        out_dir.display()
+    );
+}
+
+/// Ctrl-C finishes the current frame, writes a checkpoint and exits with 130; a second Ctrl-C
+/// exits at once.
+fn stop_on_ctrl_c() {
+    let installed = ctrlc::set_handler(|| {
+        if drapekit::run::INTERRUPTED.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("drapekit: stopping after this frame (Ctrl-C again to quit now)");
+    });
+    if let Err(e) = installed {
+        eprintln!("drapekit: warning: Ctrl-C will not write a checkpoint: {e}");
     }
 }

@@ -1,6 +1,7 @@
 //! `drapekit run`: scene → prepared run → backend → frames and summary on disk.
 
 use crate::atomic_file::write_atomic;
+use crate::checkpoint::{Checkpoint, CheckpointHeader};
 use crate::cpu::CpuSolver;
 use crate::error::Error;
 use crate::export::Exporter;
@@ -9,10 +10,15 @@ use crate::model::layout::{INTEGRATOR_EXPLICIT, INTEGRATOR_IMPLICIT};
 use crate::output::Summary;
 use crate::preview::{render_frame, PreviewOptions};
 use crate::scene::Scene;
-use crate::sim::{prepare, simulate, Prepared, RunStats};
+use crate::sim::{prepare, simulate_from, Prepared, ResumeFrom, RunStats};
 use crate::solver::Solver;
 use std::path::PathBuf;
 use std::str::FromStr;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Set by the CLI's Ctrl-C handler: the run stops after the current frame, writes a checkpoint
+/// and returns `Error::Interrupted`.
+pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
 /// Which path runs the simulation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -37,6 +43,17 @@ impl FromStr for BackendChoice {
     }
 }
 
+impl BackendChoice {
+    /// The text `from_str` reads back.
+    pub fn name(self) -> &'static str {
+        match self {
+            BackendChoice::Auto => "auto",
+            BackendChoice::Cpu => "cpu",
+            BackendChoice::Gpu => "gpu",
+        }
+    }
+}
+
 /// Options of `drapekit run` beyond the scene.
 #[derive(Clone, Debug)]
 pub struct RunOptions {
@@ -50,6 +67,8 @@ pub struct RunOptions {
     pub frames: Option<u32>,
     /// Show a progress bar on stderr (drawn only when stderr is a terminal).
     pub progress: bool,
+    /// Write `checkpoint.bin` every this many frames (and always when interrupted).
+    pub checkpoint_every: Option<u32>,
 }
 
 /// Creates the chosen backend; with `Auto`, falls back to the CPU and returns a note saying why.
@@ -92,6 +111,53 @@ pub fn make_solver(
 /// written. A run that goes non-finite still writes its summary (with `finite: false` and the
 /// error) before returning the error.
 pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
+    run_scene_from(scene, opts, None)
+}
+
+/// `drapekit resume DIR`: continues the run whose checkpoint is in `dir`, with its scene,
+/// backend and adapter (`frames` may extend it). The scene must not have changed.
+pub fn resume_run(
+    dir: &std::path::Path,
+    frames: Option<u32>,
+    progress: bool,
+) -> Result<Summary, Error> {
+    let checkpoint = Checkpoint::read(dir)?;
+    let h = &checkpoint.header;
+    let scene = Scene::load(&h.scene_path)?;
+    if scene.source != h.scene_text {
+        return Err(Error::Input(crate::error::InputError::new(
+            &h.scene_path,
+            "scene",
+            format!(
+                "the scene changed since the checkpoint in {} was written",
+                dir.display()
+            ),
+            "restore the scene as it was, or rerun it from the start with drapekit run",
+        )));
+    }
+    let opts = RunOptions {
+        backend: h.backend.parse().map_err(|e: String| {
+            Error::Input(crate::error::InputError::new(
+                &dir.join(crate::checkpoint::CHECKPOINT_FILE),
+                "backend",
+                e,
+                "rerun the scene",
+            ))
+        })?,
+        adapter: h.adapter.parse().expect("infallible"),
+        out_dir: Some(dir.to_path_buf()),
+        frames: frames.or(h.frames),
+        progress,
+        checkpoint_every: h.checkpoint_every,
+    };
+    run_scene_from(&scene, &opts, Some(checkpoint))
+}
+
+fn run_scene_from(
+    scene: &Scene,
+    opts: &RunOptions,
+    resume: Option<Checkpoint>,
+) -> Result<Summary, Error> {
     let mut scene = scene.clone();
     if let Some(frames) = opts.frames {
         scene.solver.frames = frames;
@@ -122,23 +188,95 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
     let mut outputs = Vec::new();
     let mut stats = RunStats::default();
     let mut exporter = Exporter::new(&prep, &scene.output, &out_dir);
+    let resume = match resume {
+        None => None,
+        Some(c) => {
+            if c.header.particles != prep.model.len() {
+                return Err(Error::Input(crate::error::InputError::new(
+                    &scene.path,
+                    "scene",
+                    format!(
+                        "the scene now builds {} particles, the checkpoint holds {}: a file it \
+                         uses (pattern or mesh) changed",
+                        prep.model.len(),
+                        c.header.particles
+                    ),
+                    "restore the files, or rerun the scene from the start with drapekit run",
+                )));
+            }
+            stats = c.header.stats;
+            outputs = c.header.outputs;
+            exporter.restore(c.header.kept_frames, c.kept, c.header.exported_frames);
+            Some(ResumeFrom {
+                frame: c.header.frame,
+                state: c.state,
+            })
+        }
+    };
+    let checkpoint = |frame: u32,
+                      state: &crate::solver::ParticleState,
+                      stats: &RunStats,
+                      outputs: &[String],
+                      exporter: &Exporter|
+     -> Result<(), Error> {
+        let (kept_frames, kept, exported_frames) = exporter.progress();
+        Checkpoint {
+            header: CheckpointHeader {
+                drapekit_version: env!("CARGO_PKG_VERSION").to_string(),
+                scene_path: scene.path.clone(),
+                scene_text: scene.source.clone(),
+                backend: opts.backend.name().to_string(),
+                adapter: opts.adapter.to_string(),
+                frames: opts.frames,
+                checkpoint_every: opts.checkpoint_every,
+                frame,
+                particles: state.positions.len(),
+                stats: stats.clone(),
+                outputs: outputs.to_vec(),
+                kept_frames: kept_frames.to_vec(),
+                exported_frames,
+            },
+            state: state.clone(),
+            kept: kept.to_vec(),
+        }
+        .write(&out_dir)
+    };
     let bar = progress_bar(opts.progress, prep.frames);
     let particle_substeps = prep.model.len() as f64 * prep.substeps as f64;
     let started = std::time::Instant::now();
-    let result = simulate(&prep, solver.as_mut(), &mut stats, |frame, state| {
-        if exporter.wants_frames() && exporter.on_schedule(frame) {
-            outputs.extend(exporter.frame(frame, &state.positions)?);
-        }
-        if frame > 0 {
-            let rate = particle_substeps * frame as f64 / started.elapsed().as_secs_f64();
-            bar.set_message(format!(
-                "{:.2} s simulated, {rate:.2e} particle-substeps/s",
-                frame as f32 * prep.frame_dt
-            ));
-            bar.set_position(frame as u64);
-        }
-        Ok(())
-    });
+    let result = simulate_from(
+        &prep,
+        solver.as_mut(),
+        &mut stats,
+        resume,
+        |frame, state, stats| {
+            if exporter.wants_frames() && exporter.on_schedule(frame) {
+                outputs.extend(exporter.frame(frame, &state.positions)?);
+            }
+            let interrupted = INTERRUPTED.load(Ordering::SeqCst);
+            let due = opts
+                .checkpoint_every
+                .is_some_and(|n| frame > 0 && frame % n == 0);
+            if due || interrupted {
+                checkpoint(frame, state, stats, &outputs, &exporter)?;
+            }
+            if interrupted {
+                return Err(Error::Interrupted {
+                    frame,
+                    dir: out_dir.clone(),
+                });
+            }
+            if frame > 0 {
+                let rate = particle_substeps * frame as f64 / started.elapsed().as_secs_f64();
+                bar.set_message(format!(
+                    "{:.2} s simulated, {rate:.2e} particle-substeps/s",
+                    frame as f32 * prep.frame_dt
+                ));
+                bar.set_position(frame as u64);
+            }
+            Ok(())
+        },
+    );
     bar.finish_and_clear();
     // The last frame is the result: it is written also when the run ended between `every`
     // frames (the settle rule, or a frame count that is not a multiple). The solver still
@@ -146,6 +284,10 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
     let last = stats.frames_run;
     if result.is_ok() && exporter.wants_frames() && !exporter.on_schedule(last) {
         outputs.extend(exporter.frame(last, &solver.state()?.positions)?);
+    }
+    let checkpoint_name = crate::checkpoint::CHECKPOINT_FILE.to_string();
+    if out_dir.join(&checkpoint_name).is_file() && !outputs.contains(&checkpoint_name) {
+        outputs.push(checkpoint_name);
     }
     // The caches hold the frames written so far, also when the run stopped early.
     outputs.extend(exporter.finish()?);

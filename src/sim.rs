@@ -11,7 +11,7 @@ use crate::pattern::garment::Garment;
 use crate::plan::PassPlan;
 use crate::scene::{ClothSource, Scene, Wind};
 use crate::solver::{ParticleState, Solver};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
 /// Fraction of the estimated stable step that `substeps = "auto"` uses.
@@ -358,18 +358,19 @@ pub fn substep_params(prep: &Prepared, frame: u32) -> Vec<SubstepParams> {
 }
 
 /// Why a run ended early.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Settled {
     /// The frame at which the rule fired.
     pub frame: u32,
     /// Which rule fired.
-    pub rule: &'static str,
+    pub rule: String,
     /// Kinetic energy per free particle then, in J.
     pub kinetic_energy_per_particle_j: f64,
 }
 
-/// What a run measured, filled in frame by frame (so it is complete up to a failure).
-#[derive(Clone, Debug, Default, PartialEq)]
+/// What a run measured, filled in frame by frame (so it is complete up to a failure). A
+/// checkpoint stores it, so a resumed run reports what the uninterrupted one would.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct RunStats {
     /// Frames simulated.
     pub frames_run: u32,
@@ -431,16 +432,53 @@ pub fn simulate(
     stats: &mut RunStats,
     mut on_frame: impl FnMut(u32, &ParticleState) -> Result<(), Error>,
 ) -> Result<(), Error> {
-    let initial = solver.state()?;
-    stats.finite = metrics::first_non_finite(&initial).is_none();
+    simulate_from(prep, solver, stats, None, |f, s, _| on_frame(f, s))
+}
+
+/// Where a resumed run starts: the state at the end of output frame `frame`, as a checkpoint
+/// holds it (the stats of the frames before it are restored by the caller).
+#[derive(Clone, Debug)]
+pub struct ResumeFrom {
+    /// The last frame the checkpoint completed.
+    pub frame: u32,
+    /// The state at its end, before anything that happens after a frame (gravity, releases).
+    pub state: ParticleState,
+}
+
+/// `simulate`, optionally continuing from a checkpoint, with the stats so far passed to
+/// `on_frame` (to write checkpoints). A resumed CPU run repeats the uninterrupted one bit for bit.
+pub fn simulate_from(
+    prep: &Prepared,
+    solver: &mut dyn Solver,
+    stats: &mut RunStats,
+    resume: Option<ResumeFrom>,
+    mut on_frame: impl FnMut(u32, &ParticleState, &RunStats) -> Result<(), Error>,
+) -> Result<(), Error> {
     let seam_gaps = |state: &ParticleState| match &prep.garment {
         Some(g) => metrics::seam_gaps(&g.seam_pairs, g.stitches, &state.positions),
         None => Vec::new(),
     };
-    stats.seam_gaps = seam_gaps(&initial);
-    on_frame(0, &initial)?;
-    let free = prep.model.pinned.iter().filter(|p| !**p).count().max(1) as f64;
-    for frame in 1..=prep.frames {
+    let first = match resume {
+        None => {
+            let initial = solver.state()?;
+            stats.finite = metrics::first_non_finite(&initial).is_none();
+            stats.seam_gaps = seam_gaps(&initial);
+            on_frame(0, &initial, stats)?;
+            1
+        }
+        Some(r) => {
+            solver.set_state(&r.state);
+            if r.frame >= prep.gravity.1 && prep.gravity.1 > 0 {
+                switch_gravity_on(prep, solver);
+            }
+            // What the interrupted run did after this frame, it does now.
+            if after_frame(prep, solver, stats, r.frame, r.state)? {
+                return Ok(());
+            }
+            r.frame + 1
+        }
+    };
+    for frame in first..=prep.frames {
         let steps = substep_params(prep, frame);
         let start = Instant::now();
         solver.advance(&steps)?;
@@ -504,29 +542,49 @@ pub fn simulate(
         if !stats.seam_gaps.is_empty() && all_closed && stats.seams_closed_frame.is_none() {
             stats.seams_closed_frame = Some(frame);
         }
-        on_frame(frame, &state)?;
-        if frame == prep.gravity.1 && frame > 0 {
-            let mut params = prep.params;
-            params.gravity = prep.gravity.0.extend(0.0).to_array();
-            solver.set_params(&params);
+        on_frame(frame, &state, stats)?;
+        if frame == prep.gravity.1 {
+            switch_gravity_on(prep, solver);
         }
-        if frame == prep.attach_frames && !prep.attached.is_empty() {
-            release(prep, solver, state)?;
-            stats.released_after_frame = Some(frame);
-        }
-        // A cloth at rest while it is still being sewn or held has not settled.
-        let loaded = frame > prep.gravity.1 && frame > prep.attach_frames;
-        if let (Some(threshold), true) = (prep.settle_ke_per_particle, loaded) {
-            let per_particle = stats.kinetic_energy_j / free;
-            if per_particle < threshold as f64 {
-                stats.settled = Some(Settled {
-                    frame,
-                    rule: "kinetic_energy_per_particle",
-                    kinetic_energy_per_particle_j: per_particle,
-                });
-                break;
-            }
+        if after_frame(prep, solver, stats, frame, state)? {
+            break;
         }
     }
     Ok(())
+}
+
+fn switch_gravity_on(prep: &Prepared, solver: &mut dyn Solver) {
+    let mut params = prep.params;
+    params.gravity = prep.gravity.0.extend(0.0).to_array();
+    solver.set_params(&params);
+}
+
+/// What happens once frame `frame` is done: attachments let go, and the settle rule. Returns
+/// whether the run has settled.
+fn after_frame(
+    prep: &Prepared,
+    solver: &mut dyn Solver,
+    stats: &mut RunStats,
+    frame: u32,
+    state: ParticleState,
+) -> Result<bool, Error> {
+    if frame == prep.attach_frames && !prep.attached.is_empty() {
+        release(prep, solver, state)?;
+        stats.released_after_frame = Some(frame);
+    }
+    // A cloth at rest while it is still being sewn or held has not settled.
+    let loaded = frame > prep.gravity.1 && frame > prep.attach_frames;
+    let free = prep.model.pinned.iter().filter(|p| !**p).count().max(1) as f64;
+    if let (Some(threshold), true) = (prep.settle_ke_per_particle, loaded) {
+        let per_particle = stats.kinetic_energy_j / free;
+        if per_particle < threshold as f64 {
+            stats.settled = Some(Settled {
+                frame,
+                rule: "kinetic_energy_per_particle".into(),
+                kinetic_energy_per_particle_j: per_particle,
+            });
+            return Ok(true);
+        }
+    }
+    Ok(false)
 }

@@ -24,6 +24,7 @@ fn options(out: &Path, frames: u32) -> RunOptions {
         out_dir: Some(out.to_path_buf()),
         frames: Some(frames),
         progress: false,
+        checkpoint_every: None,
     }
 }
 

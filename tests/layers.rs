@@ -22,6 +22,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("metrics", 6),
     ("sim", 7),
     ("run", 8),
+    ("checkpoint", 8),
     ("output", 8),
     ("export", 8),
     ("bench", 8),

@@ -151,6 +151,19 @@ impl<'a> Exporter<'a> {
         Ok(names)
     }
 
+    /// The frames kept for the caches and how many frames were written: what a checkpoint
+    /// saves so that a resumed run's caches hold every frame.
+    pub fn progress(&self) -> (&[u32], &[Vec<Vec3>], usize) {
+        (&self.kept_frames, &self.kept, self.written)
+    }
+
+    /// Continues from a checkpoint's `progress`.
+    pub fn restore(&mut self, kept_frames: Vec<u32>, kept: Vec<Vec<Vec3>>, written: usize) {
+        self.kept_frames = kept_frames;
+        self.kept = kept;
+        self.written = written;
+    }
+
     /// The body's vertices in world coordinates at `frame`'s time.
     fn body_world(&self, c: &Collider, frame: u32) -> Vec<Vec3> {
         let pose = c.motion.at(frame as f32 * self.frame_dt);

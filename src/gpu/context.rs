@@ -26,6 +26,17 @@ impl FromStr for AdapterChoice {
     }
 }
 
+impl std::fmt::Display for AdapterChoice {
+    /// The text `FromStr` reads back.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            AdapterChoice::Auto => write!(f, "auto"),
+            AdapterChoice::Fallback => write!(f, "fallback"),
+            AdapterChoice::Named(name) => write!(f, "{name}"),
+        }
+    }
+}
+
 /// What `drapekit info` reports.
 #[derive(Clone, Debug)]
 pub struct AdapterList {

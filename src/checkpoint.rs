@@ -1,0 +1,146 @@
+//! Checkpoints: everything a run needs to continue where it stopped, in one file written
+//! atomically, `checkpoint.bin` in the output folder. The layout: a magic line, the length of a
+//! JSON header (u64, little endian), the header, then f32 little-endian arrays: positions and
+//! velocities (4 per particle each), and the frames the point cache and glTF export keep
+//! (3 per particle per kept frame). The solver's other arrays are rebuilt every substep, so
+//! the state and the run's statistics are all there is to save.
+
+use crate::atomic_file::write_atomic;
+use crate::error::{Error, InputError};
+use crate::sim::RunStats;
+use crate::solver::ParticleState;
+use glam::{Vec3, Vec4};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The checkpoint's file name inside the output folder.
+pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
+const MAGIC: &[u8] = b"DRAPEKIT CHECKPOINT 1\n";
+
+/// The JSON header: the run's inputs (to refuse a resume after they changed) and its progress.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CheckpointHeader {
+    /// drapekit's version that wrote it.
+    pub drapekit_version: String,
+    /// The scene file, as given to `drapekit run`.
+    pub scene_path: PathBuf,
+    /// The scene file's text then: a resume refuses a changed scene.
+    pub scene_text: String,
+    /// `--backend` as given ("auto", "cpu" or "gpu").
+    pub backend: String,
+    /// `--adapter` as given.
+    pub adapter: String,
+    /// `--frames`, when given.
+    pub frames: Option<u32>,
+    /// `--checkpoint-every`, when given.
+    pub checkpoint_every: Option<u32>,
+    /// The last completed output frame.
+    pub frame: u32,
+    /// Particles in the state.
+    pub particles: usize,
+    /// The statistics of frames 0..=frame.
+    pub stats: RunStats,
+    /// Files written so far.
+    pub outputs: Vec<String>,
+    /// Frame numbers of the kept export frames.
+    pub kept_frames: Vec<u32>,
+    /// Frames the exporter had written.
+    pub exported_frames: usize,
+}
+
+/// A checkpoint: its header and arrays.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Checkpoint {
+    /// Inputs and progress.
+    pub header: CheckpointHeader,
+    /// The state at the end of `header.frame`.
+    pub state: ParticleState,
+    /// The export frames kept so far, one per `header.kept_frames`.
+    pub kept: Vec<Vec<Vec3>>,
+}
+
+impl Checkpoint {
+    /// Writes `dir/checkpoint.bin` atomically.
+    pub fn write(&self, dir: &Path) -> Result<(), Error> {
+        let header = serde_json::to_vec(&self.header).expect("checkpoint header serialises");
+        let n = self.state.positions.len();
+        let mut bytes = Vec::with_capacity(MAGIC.len() + 8 + header.len() + n * 32);
+        bytes.extend_from_slice(MAGIC);
+        bytes.extend_from_slice(&(header.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(&header);
+        let floats = (self.state.positions.iter())
+            .chain(&self.state.velocities)
+            .flat_map(|v| v.to_array())
+            .chain(self.kept.iter().flatten().flat_map(|v| v.to_array()));
+        for f in floats {
+            bytes.extend_from_slice(&f.to_le_bytes());
+        }
+        write_atomic(&dir.join(CHECKPOINT_FILE), &bytes)
+    }
+
+    /// Reads `dir/checkpoint.bin`; a missing, truncated or foreign file is bad input.
+    pub fn read(dir: &Path) -> Result<Checkpoint, Error> {
+        let path = dir.join(CHECKPOINT_FILE);
+        let bytes = std::fs::read(&path).map_err(|e| {
+            Error::Input(InputError::new(
+                &path,
+                "checkpoint",
+                format!("cannot read it ({e})"),
+                "give the output folder of a run started with --checkpoint-every N (or one that \
+                 was interrupted with Ctrl-C)",
+            ))
+        })?;
+        let bad = |problem: &str| {
+            Error::Input(InputError::new(
+                &path,
+                "checkpoint",
+                problem.to_string(),
+                "the file is damaged or not a drapekit checkpoint: rerun the scene",
+            ))
+        };
+        let rest = bytes
+            .strip_prefix(MAGIC)
+            .ok_or_else(|| bad("it does not start with the checkpoint magic line"))?;
+        let len = rest
+            .get(..8)
+            .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")) as usize)
+            .ok_or_else(|| bad("it ends inside its header length"))?;
+        let header_bytes = rest
+            .get(8..8 + len)
+            .ok_or_else(|| bad("it ends inside its header"))?;
+        let header: CheckpointHeader = serde_json::from_slice(header_bytes)
+            .map_err(|e| bad(&format!("its header is not valid ({e})")))?;
+        let data = &rest[8 + len..];
+        let n = header.particles;
+        let expected = 4 * (8 * n + 3 * n * header.kept_frames.len());
+        if data.len() != expected {
+            return Err(bad(&format!(
+                "it holds {} bytes of arrays where its header says {expected}",
+                data.len()
+            )));
+        }
+        let floats: Vec<f32> = data
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes")))
+            .collect();
+        let vec4s = |from: usize| -> Vec<Vec4> {
+            floats[from..from + 4 * n]
+                .chunks_exact(4)
+                .map(Vec4::from_slice)
+                .collect()
+        };
+        let kept = floats[8 * n..]
+            .chunks_exact(3 * n.max(1))
+            .take(header.kept_frames.len())
+            .map(|f| f.chunks_exact(3).map(Vec3::from_slice).collect())
+            .collect();
+        Ok(Checkpoint {
+            state: ParticleState {
+                positions: vec4s(0),
+                velocities: vec4s(4 * n),
+            },
+            kept,
+            header,
+        })
+    }
+}
