@@ -105,5 +105,30 @@ fn whole_substep(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, per_pass, whole_substep);
+/// Model building (mesh edges, springs, hinges) per particle: linear in the particle count when
+/// the time per element stays flat from 256² to 1024² (Throughput: particles).
+fn model_build(c: &mut Criterion) {
+    use drapekit::mesh::{GridPlane, TriMesh};
+    use drapekit::model::ClothModel;
+    use drapekit::scene::Fabric;
+    let mut group = c.benchmark_group("model_build");
+    group.sample_size(10);
+    let fabric = Fabric {
+        density: 0.2,
+        stretch_stiffness: 500.0,
+        bending_stiffness: Some(1e-5),
+        damping_ratio: 0.05,
+    };
+    for n in [256u32, 1024] {
+        let origin = glam::Vec3::new(0.0, 1.0, 0.0);
+        let mesh = TriMesh::grid(1.0, 1.0, n, n, origin, GridPlane::Xy);
+        group.throughput(Throughput::Elements((n * n) as u64));
+        group.bench_function(BenchmarkId::new("from_mesh", format!("{n}x{n}")), |b| {
+            b.iter(|| ClothModel::from_mesh(&mesh, &fabric, &[]))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, per_pass, whole_substep, model_build);
 criterion_main!(benches);

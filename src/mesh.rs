@@ -3,7 +3,6 @@
 
 use crate::error::InputError;
 use glam::Vec3;
-use std::collections::HashMap;
 use std::path::Path;
 
 /// An indexed triangle mesh in metres.
@@ -155,24 +154,63 @@ impl TriMesh {
     /// Unique edges with their opposite vertices, sorted by endpoints for determinism.
     /// An edge shared by more than two triangles (non-manifold) keeps only the first two.
     pub fn edges(&self) -> Vec<Edge> {
-        let mut map: HashMap<[u32; 2], Edge> = HashMap::new();
+        self.edges_with_areas()
+            .into_iter()
+            .map(|(e, _)| e)
+            .collect()
+    }
+
+    /// `edges`, each with the summed area of the triangles on it (in triangle order). Linear in
+    /// the mesh: the triangle sides are bucketed by their lower vertex (a counting sort) and
+    /// each bucket of a few sides is sorted by the upper one; a hash map here made 4M-particle
+    /// models take 25 s through cache misses.
+    pub fn edges_with_areas(&self) -> Vec<(Edge, f32)> {
+        let n = self.positions.len();
+        let mut start = vec![0u32; n + 1];
         for t in &self.triangles {
             for k in 0..3 {
-                let (a, b, o) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-                let key = [a.min(b), a.max(b)];
-                let edge = map.entry(key).or_insert(Edge {
-                    v: key,
-                    opposite: [None, None],
-                });
-                if edge.opposite[0].is_none() {
-                    edge.opposite[0] = Some(o);
-                } else if edge.opposite[1].is_none() {
-                    edge.opposite[1] = Some(o);
-                }
+                start[t[k].min(t[(k + 1) % 3]) as usize + 1] += 1;
             }
         }
-        let mut edges: Vec<Edge> = map.into_values().collect();
-        edges.sort_by_key(|e| e.v);
+        for v in 0..n {
+            start[v + 1] += start[v];
+        }
+        // (upper vertex, opposite vertex, triangle area), grouped by lower vertex.
+        let mut sides = vec![(0u32, 0u32, 0.0f32); 3 * self.triangles.len()];
+        let mut cursor = start.clone();
+        for &t in &self.triangles {
+            let area = self.triangle_area(t);
+            for k in 0..3 {
+                let (a, b, o) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+                let slot = &mut cursor[a.min(b) as usize];
+                sides[*slot as usize] = (a.max(b), o, area);
+                *slot += 1;
+            }
+        }
+        let mut edges = Vec::with_capacity(sides.len() / 2 + n);
+        for v in 0..n {
+            let bucket = &mut sides[start[v] as usize..start[v + 1] as usize];
+            // Stable: sides of one edge keep triangle order (first two opposites, area sum).
+            bucket.sort_by_key(|s| s.0);
+            let mut k = 0;
+            while k < bucket.len() {
+                let upper = bucket[k].0;
+                let mut edge = Edge {
+                    v: [v as u32, upper],
+                    opposite: [Some(bucket[k].1), None],
+                };
+                let mut area = bucket[k].2;
+                k += 1;
+                while k < bucket.len() && bucket[k].0 == upper {
+                    if edge.opposite[1].is_none() {
+                        edge.opposite[1] = Some(bucket[k].1);
+                    }
+                    area += bucket[k].2;
+                    k += 1;
+                }
+                edges.push((edge, area));
+            }
+        }
         edges
     }
 

@@ -112,25 +112,16 @@ impl ClothModel {
         for &i in pinned_ids {
             pinned[i as usize] = true;
         }
-        let mut edge_area = std::collections::HashMap::new();
-        for &t in &mesh.triangles {
-            let area = mesh.triangle_area(t);
-            for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                *edge_area.entry([a.min(b), a.max(b)]).or_insert(0.0f32) += area;
-            }
-        }
         let mut springs = Vec::new();
         let mut hinges = Vec::new();
-        for edge in mesh.edges() {
+        for (edge, edge_area) in mesh.edges_with_areas() {
             let [a, b] = edge.v;
             let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
             let rest_length = pa.distance(pb);
             if rest_length <= 0.0 {
                 continue;
             }
-            let stiffness =
-                fabric.stretch_stiffness * edge_area[&edge.v] / (rest_length * rest_length);
+            let stiffness = fabric.stretch_stiffness * edge_area / (rest_length * rest_length);
             let (ma, mb) = (masses[a as usize], masses[b as usize]);
             let reduced_mass = ma * mb / (ma + mb);
             let damping = 2.0 * fabric.damping_ratio * (stiffness * reduced_mass).sqrt();
