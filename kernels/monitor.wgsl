@@ -1,5 +1,6 @@
 // Frame health, once per output frame: per workgroup, the kinetic energy ½m|v|² of its free
-// particles, their largest speed, the largest strain of their springs (and which particle has
+// particles, their gravitational energy −m·g·x and their springs' elastic energy ½k(l − L)²
+// (halved again: each spring is seen from both ends), their largest speed, the largest strain of their springs (and which particle has
 // it), and how many have a non-finite position or velocity (and the first). The host finishes
 // the reduction over workgroups, so only 32 bytes per 64 particles are read back.
 // CPU twin: src/cpu/monitor.rs, which reduces each block of 64 in the same tree order.
@@ -9,11 +10,13 @@
 @group(0) @binding(2) var vel: texture_2d<f32>;
 @group(0) @binding(3) var spring_offsets: texture_2d<u32>;    // r32uint, N + 1 entries
 @group(0) @binding(4) var springs: texture_2d<u32>;           // one SpringRef per texel
-// Two entries per workgroup: (energy, speed, strain, worst particle) as bits, then
-// (non-finite count, first non-finite particle, 0, 0).
+// Two entries per workgroup: (kinetic energy, speed, strain, worst particle) as bits, then
+// (non-finite count, first non-finite particle, gravitational energy, elastic energy).
 @group(0) @binding(5) var<storage, read_write> partials: array<vec4<u32>>;
 
 var<workgroup> energy: array<f32, WORKGROUP_SIZE>;
+var<workgroup> gravity_energy: array<f32, WORKGROUP_SIZE>;
+var<workgroup> elastic_energy: array<f32, WORKGROUP_SIZE>;
 var<workgroup> speed: array<f32, WORKGROUP_SIZE>;
 var<workgroup> strain: array<f32, WORKGROUP_SIZE>;
 var<workgroup> worst: array<u32, WORKGROUP_SIZE>;
@@ -35,6 +38,8 @@ fn main(
 ) {
     let i = particle_index(gid, groups);
     var e = 0.0;
+    var eg = 0.0;
+    var ee = 0.0;
     var s = 0.0;
     var worst_strain = -1.0;
     var b = 0u;
@@ -48,6 +53,7 @@ fn main(
         } else {
             if (p.w > 0.0) {
                 e = 0.5 * dot(v, v) / p.w;
+                eg = -dot(params.gravity.xyz, p.xyz) / p.w;
             }
             s = length(v);
             let begin = textureLoad(spring_offsets, texel(i), 0).x;
@@ -55,11 +61,18 @@ fn main(
             for (var k = begin; k < end; k = k + 1u) {
                 let sp = unpack_spring(textureLoad(springs, texel(k), 0));
                 let q = textureLoad(pos, texel(sp.other), 0).xyz;
-                worst_strain = max(worst_strain, (length(q - p.xyz) - sp.rest_length) / sp.rest_length);
+                // A non-finite neighbour is counted where it lies, not here.
+                if (finite3(q)) {
+                    let stretch = length(q - p.xyz) - sp.rest_length;
+                    worst_strain = max(worst_strain, stretch / sp.rest_length);
+                    ee = ee + 0.25 * sp.stiffness * stretch * stretch;
+                }
             }
         }
     }
     energy[local] = e;
+    gravity_energy[local] = eg;
+    elastic_energy[local] = ee;
     speed[local] = s;
     strain[local] = worst_strain;
     worst[local] = i;
@@ -70,6 +83,8 @@ fn main(
         if (local < half) {
             let o = local + half;
             energy[local] = energy[local] + energy[o];
+            gravity_energy[local] = gravity_energy[local] + gravity_energy[o];
+            elastic_energy[local] = elastic_energy[local] + elastic_energy[o];
             speed[local] = max(speed[local], speed[o]);
             // Ties keep this slot's candidate: the CPU twin reduces in the same tree.
             if (strain[o] > strain[local]) {
@@ -85,6 +100,7 @@ fn main(
         let group = i / WORKGROUP_SIZE;
         partials[2u * group] = vec4<u32>(
             bitcast<u32>(energy[0]), bitcast<u32>(speed[0]), bitcast<u32>(strain[0]), worst[0]);
-        partials[2u * group + 1u] = vec4<u32>(bad[0], first_bad[0], 0u, 0u);
+        partials[2u * group + 1u] = vec4<u32>(
+            bad[0], first_bad[0], bitcast<u32>(gravity_energy[0]), bitcast<u32>(elastic_energy[0]));
     }
 }

@@ -82,3 +82,46 @@ pub fn body_contacts(distances: &[f32], reach: f32) -> usize {
         .filter(|&&d| d >= 0.0 && d <= reach)
         .count()
 }
+
+/// What a user should know about a cloth mesh before trusting a run: triangles with no area
+/// (they carry no mass, stretch or bending) and free particles that only such triangles touch
+/// (no mass: they stay where they are, as if pinned), and, when asked (not for patterns, whose
+/// panels meet only through seams), vertices at the same position (the cloth can open there).
+pub fn mesh_warnings(model: &ClothModel, check_duplicates: bool) -> Vec<String> {
+    let mut warnings = Vec::new();
+    let area = |t: &[u32; 3]| {
+        let [a, b, c] = t.map(|i| model.positions[i as usize]);
+        (b - a).cross(c - a).length()
+    };
+    let flat = model.triangles.iter().filter(|t| area(t) <= 0.0).count();
+    let massless: Vec<usize> = (0..model.len())
+        .filter(|&i| !model.pinned[i] && model.masses[i] <= 0.0)
+        .collect();
+    if flat > 0 || !massless.is_empty() {
+        warnings.push(format!(
+            "the cloth mesh has {flat} triangle(s) with no area; {} free particle(s) touch only \
+             such triangles and have no mass, so they stay where they are{}. Repair the mesh \
+             (remove degenerate faces) if that is not meant",
+            massless.len(),
+            massless
+                .first()
+                .map_or(String::new(), |i| format!(" (first: particle {i})"))
+        ));
+    }
+    if !check_duplicates {
+        return warnings;
+    }
+    let mut keys: Vec<[u32; 3]> = (model.positions.iter())
+        .map(|p| p.to_array().map(f32::to_bits))
+        .collect();
+    keys.sort_unstable();
+    let duplicates = keys.windows(2).filter(|w| w[0] == w[1]).count();
+    if duplicates > 0 {
+        warnings.push(format!(
+            "the cloth mesh has {duplicates} vertex position(s) used by more than one vertex: \
+             the cloth is not joined there and can open (weld the vertices in the mesh if it \
+             should be one sheet; a pattern's seams do this by design)"
+        ));
+    }
+    warnings
+}

@@ -65,6 +65,16 @@ pub struct Prepared {
     pub gravity: (glam::Vec3, u32),
     /// Vertex colours of the implicit solve (`None` for the explicit integrators).
     pub colors: Option<usize>,
+    /// The first frame from which the cloth's energy may not rise (nothing does work on it
+    /// any more: gravity on, attachments released); `None` with wind, a moving body or
+    /// self-collision, which may add energy, and with bending or seams, whose energy the
+    /// monitor does not sum.
+    pub energy_check_from: Option<u32>,
+    /// The most the energy may rise between such frames, as a fraction of the kinetic plus
+    /// elastic energy at the earlier one.
+    pub max_energy_growth: f32,
+    /// A frame with a particle faster than this has diverged, in m/s.
+    pub max_speed: f32,
 }
 
 impl Prepared {
@@ -155,6 +165,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         _ => "scene",
     };
     let mut warnings = Vec::new();
+    warnings.extend(metrics::mesh_warnings(&model, garment.is_none()));
     let (substeps, auto_substeps) = match s.substeps {
         Some(n) if implicit => (n, false),
         None if implicit => (1, true),
@@ -298,6 +309,8 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         _pad4: 0,
         _pad5: 0,
     };
+    let energy_complete =
+        model.seams.is_empty() && (model.hinges.is_empty() || !scene.effects().bending);
     Ok(Prepared {
         model,
         params,
@@ -327,6 +340,19 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
             (scene.gravity_start / frame_dt).ceil() as u32,
         ),
         colors,
+        // The monitor sums kinetic, gravitational and spring energy; hinges and seams store
+        // energy it does not count, so with them only the speed and strain limits guard.
+        energy_check_from: (wind.is_none()
+            && body_surface_speed == 0.0
+            && scene.self_collision.is_none()
+            && energy_complete)
+            .then(|| {
+                let gravity_on = (scene.gravity_start / frame_dt).ceil() as u32;
+                let sewn = (sewing_time / frame_dt).ceil() as u32;
+                gravity_on.max(sewn).max(attach_frames) + 1
+            }),
+        max_energy_growth: s.max_energy_growth,
+        max_speed: s.max_speed,
     })
 }
 
@@ -400,6 +426,10 @@ pub struct RunStats {
     pub last_edge_strain: f32,
     /// Largest particle speed at any output frame, in m/s.
     pub max_speed: f32,
+    /// The last frame's mechanical energy (kinetic + gravitational + elastic) and its kinetic
+    /// plus elastic part, in J, for the energy-growth check.
+    #[serde(default)]
+    pub energy: Option<(f64, f64)>,
 }
 
 /// A particle rests on the body when it is within the collision thickness plus this of the
@@ -518,6 +548,40 @@ pub fn simulate_from(
                 prep.params.dt
             )));
         }
+        if health.max_speed > prep.max_speed {
+            return Err(Error::Unstable(format!(
+                "frame {frame} ({substeps}): a particle moves at {:.3e} m/s, past \
+                 solver.max_speed_m_s = {} m/s: the run diverged and the frame was not written. \
+                 At a substep of {:.3e} s, the step is too large for the fabric's stiffness: use \
+                 substeps = \"auto\", more substeps or integrator = \"implicit\"",
+                health.max_speed, prep.max_speed, prep.params.dt
+            )));
+        }
+        let energy = health.kinetic_energy + health.gravity_energy + health.elastic_energy;
+        let active = health.kinetic_energy + health.elastic_energy;
+        if let (Some((before, before_active)), Some(from)) = (stats.energy, prep.energy_check_from)
+        {
+            // f32 partial sums of energies whose largest part is ~|gravitational|: a relative
+            // 1e-5 of the energies involved, plus 1 nJ per particle, is rounding, not growth.
+            let rounding = 1e-5 * (health.gravity_energy.abs() + active + before_active.abs())
+                + 1e-9 * prep.model.len() as f64;
+            let allowed = before + prep.max_energy_growth as f64 * before_active + rounding;
+            if frame > from && energy > allowed {
+                return Err(Error::Unstable(format!(
+                    "frame {frame} ({substeps}): the cloth's energy rose from {before:.4e} J to \
+                     {energy:.4e} J although nothing did work on it (allowed: \
+                     solver.max_energy_growth = {:.0}% of its kinetic and elastic energy, \
+                     {:.3e} J); the frame was not written. The fastest particle is at {:.2} m/s: \
+                     the substep ({:.3e} s) is too large for the fabric's stiffness, use \
+                     substeps = \"auto\", more substeps or integrator = \"implicit\"",
+                    100.0 * prep.max_energy_growth,
+                    prep.max_energy_growth as f64 * before_active,
+                    health.max_speed,
+                    prep.params.dt
+                )));
+            }
+        }
+        stats.energy = Some((energy, active));
         let state = solver.state()?;
         stats.wall_seconds += start.elapsed().as_secs_f64();
         if let Some(r) = solver.residual()? {

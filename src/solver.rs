@@ -73,6 +73,10 @@ pub fn relative_residual(residual: &[Vec2]) -> f32 {
 pub struct HealthPartial {
     /// Σ ½m|v|² over free finite particles, in J.
     pub kinetic_energy: f32,
+    /// Σ −m·g·x over free finite particles (gravity as set now), in J.
+    pub gravity_energy: f32,
+    /// Σ ½k(l − L)² of the springs, each seen from both ends at a half share, in J.
+    pub elastic_energy: f32,
     /// Largest |v| in m/s.
     pub max_speed: f32,
     /// Largest (|d| − L)/L of the particles' springs (−1 with no springs).
@@ -90,6 +94,10 @@ pub struct HealthPartial {
 pub struct Health {
     /// Kinetic energy of the free particles, in J.
     pub kinetic_energy: f64,
+    /// Gravitational energy −Σ m·g·x of the free particles, in J (zero while gravity is off).
+    pub gravity_energy: f64,
+    /// Elastic energy of the stretch springs, in J.
+    pub elastic_energy: f64,
     /// Largest particle speed, in m/s.
     pub max_speed: f32,
     /// Largest spring strain (0.1 = 10%).
@@ -107,6 +115,8 @@ impl Health {
     pub fn from_partials(partials: &[HealthPartial]) -> Health {
         let mut h = Health {
             kinetic_energy: 0.0,
+            gravity_energy: 0.0,
+            elastic_energy: 0.0,
             max_speed: 0.0,
             max_strain: -1.0,
             worst: 0,
@@ -115,6 +125,8 @@ impl Health {
         };
         for p in partials {
             h.kinetic_energy += p.kinetic_energy as f64;
+            h.gravity_energy += p.gravity_energy as f64;
+            h.elastic_energy += p.elastic_energy as f64;
             h.max_speed = h.max_speed.max(p.max_speed);
             if p.max_strain > h.max_strain {
                 h.max_strain = p.max_strain;

@@ -230,6 +230,15 @@ fn parity_monitor() {
     assert!((g.max_speed - c.max_speed).abs() <= 1e-6 * c.max_speed);
     assert!((g.max_strain - c.max_strain).abs() <= 2e-6 * (1.0 + c.max_strain.abs()));
     assert_eq!(g.worst, c.worst, "worst particle");
+    // Gravitational and elastic energies: tree sums like the kinetic one; the elastic terms
+    // carry the stretch cancellation twice (squared), 4e-6 relative each.
+    for (what, a, b) in [
+        ("gravitational", g.gravity_energy, c.gravity_energy),
+        ("elastic", g.elastic_energy, c.elastic_energy),
+    ] {
+        assert!(b != 0.0, "{what} energy is zero");
+        assert!((a - b).abs() <= 1e-5 * b.abs(), "{what} energy {a} vs {b}");
+    }
     // The CPU's energy is the f64 sum of the same ½m|v|² over finite free particles.
     let direct: f64 = (state.positions.iter().zip(&state.velocities))
         .filter(|(p, v)| p.w > 0.0 && p.is_finite() && v.is_finite())

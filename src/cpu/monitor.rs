@@ -17,7 +17,10 @@ pub fn monitor(
     (0..n.div_ceil(size).max(1))
         .map(|group| {
             let mut slots: Vec<HealthPartial> = (0..size)
-                .map(|local| particle_health(group * size + local, n, pos, vel, offsets, springs))
+                .map(|local| {
+                    let i = group * size + local;
+                    particle_health(params, i, pos, vel, offsets, springs)
+                })
                 .collect();
             let mut half = size / 2;
             while half > 0 {
@@ -25,6 +28,8 @@ pub fn monitor(
                     let o = slots[local + half];
                     let a = &mut slots[local];
                     a.kinetic_energy += o.kinetic_energy;
+                    a.gravity_energy += o.gravity_energy;
+                    a.elastic_energy += o.elastic_energy;
                     a.max_speed = a.max_speed.max(o.max_speed);
                     if o.max_strain > a.max_strain {
                         a.max_strain = o.max_strain;
@@ -42,8 +47,8 @@ pub fn monitor(
 
 /// One thread's values before the reduction.
 fn particle_health(
+    params: &SimParams,
     i: usize,
-    n: usize,
     pos: &[Vec4],
     vel: &[Vec4],
     offsets: &[u32],
@@ -51,13 +56,15 @@ fn particle_health(
 ) -> HealthPartial {
     let mut h = HealthPartial {
         kinetic_energy: 0.0,
+        gravity_energy: 0.0,
+        elastic_energy: 0.0,
         max_speed: 0.0,
         max_strain: -1.0,
         worst: i as u32,
         non_finite: 0,
         first_non_finite: u32::MAX,
     };
-    if i >= n {
+    if i >= params.num_particles as usize {
         return h;
     }
     let p = pos[i];
@@ -69,12 +76,18 @@ fn particle_health(
     }
     if p.w > 0.0 {
         h.kinetic_energy = 0.5 * v.dot(v) / p.w;
+        h.gravity_energy = -Vec4::from(params.gravity).truncate().dot(p.truncate()) / p.w;
     }
     h.max_speed = v.length();
     for s in &springs[offsets[i] as usize..offsets[i + 1] as usize] {
         let q = pos[s.other as usize].truncate();
-        let strain = (q.distance(p.truncate()) - s.rest_length) / s.rest_length;
-        h.max_strain = h.max_strain.max(strain);
+        // A non-finite neighbour is counted where it lies, not here.
+        if !q.is_finite() {
+            continue;
+        }
+        let stretch = q.distance(p.truncate()) - s.rest_length;
+        h.max_strain = h.max_strain.max(stretch / s.rest_length);
+        h.elastic_energy += 0.25 * s.stiffness * stretch * stretch;
     }
     h
 }

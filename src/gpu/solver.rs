@@ -502,6 +502,8 @@ impl Solver for GpuSolver {
             .chunks_exact(8)
             .map(|w| crate::solver::HealthPartial {
                 kinetic_energy: f32::from_bits(w[0]),
+                gravity_energy: f32::from_bits(w[6]),
+                elastic_energy: f32::from_bits(w[7]),
                 max_speed: f32::from_bits(w[1]),
                 max_strain: f32::from_bits(w[2]),
                 worst: w[3],

@@ -133,6 +133,11 @@ impl ClothModel {
             });
             if let (Some(kb), [Some(o1), Some(o2)]) = (fabric.bending_stiffness, edge.opposite) {
                 let p = |i: u32| mesh.positions[i as usize];
+                // A flat (zero-area) triangle has no normal, so no dihedral angle: no hinge.
+                let flat = |o: u32| (p(b) - p(a)).cross(p(o) - p(a)).length_squared() == 0.0;
+                if flat(o1) || flat(o2) {
+                    continue;
+                }
                 hinges.push(Hinge {
                     v: [a, b, o1, o2],
                     stiffness: kb,

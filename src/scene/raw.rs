@@ -201,8 +201,23 @@ pub(super) struct RawSolver {
     pub(super) max_strain: f64,
     pub(super) max_memory_mb: Option<f64>,
     pub(super) strain_limit: Option<RawStrainLimit>,
+    #[serde(default = "default_max_energy_growth")]
+    pub(super) max_energy_growth: f64,
+    #[serde(default = "default_max_speed")]
+    pub(super) max_speed_m_s: f64,
     #[serde(default = "default_strain_limit_iterations")]
     pub(super) strain_limit_iterations: i64,
+}
+
+/// Between two frames with no work done on the cloth, its energy may rise by half its kinetic
+/// plus elastic energy before the run counts as diverging (README, "Stability and limits").
+fn default_max_energy_growth() -> f64 {
+    0.5
+}
+
+/// No garment moves at 100 m/s: a whipped cloth tip reaches tens of m/s, a swung arm a few.
+fn default_max_speed() -> f64 {
+    100.0
 }
 
 /// `strain_limit = 0.1`, or `true` (the default limit) / `false` (off).

@@ -38,6 +38,11 @@ pub struct SolverSettings {
     pub strain_limit: Option<f32>,
     /// Jacobi iterations of the strain-limiting stage per substep.
     pub strain_limit_iterations: u32,
+    /// Between frames with no work done on the cloth, the most its energy may rise, as a
+    /// fraction of its kinetic plus elastic energy at the earlier frame.
+    pub max_energy_growth: f32,
+    /// A frame with a particle faster than this (m/s) has diverged.
+    pub max_speed: f32,
 }
 
 /// The default of `[solver] strain_limit`: 10% over rest length. Woven fabrics reach about 5%
@@ -125,6 +130,20 @@ pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings,
                 "(as a fraction: 0.1 = 10%)",
             )?),
         },
+        max_energy_growth: c.within(
+            "solver",
+            "max_energy_growth",
+            s.max_energy_growth,
+            (1e-3, 1e6),
+            "(as a fraction: 0.5 = 50%)",
+        )?,
+        max_speed: c.within(
+            "solver",
+            "max_speed_m_s",
+            s.max_speed_m_s,
+            (0.1, 1e6),
+            "m/s",
+        )?,
         strain_limit_iterations: c.count(
             "solver",
             "strain_limit_iterations",
