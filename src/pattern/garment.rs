@@ -87,6 +87,10 @@ impl Garment {
     }
 }
 
+/// The most particles all panel outlines together may take: 4 million (a 2000×2000 grid's
+/// worth, beyond which the particle budget refuses any garment anyway).
+pub const MAX_OUTLINE_PARTICLES: usize = 4_000_000;
+
 impl Garment {
     /// Builds the cloth for `pattern`.
     pub fn build(pattern: &Pattern, options: &GarmentOptions) -> Result<Garment, InputError> {
@@ -102,6 +106,8 @@ impl Garment {
             .map(|p| {
                 p.edges
                     .iter()
+                    // `as` saturates: an infinite or NaN length becomes usize::MAX or 0 here and
+                    // is refused below (NaN lengths are refused when the pattern loads).
                     .map(|e| ((e.curve.length() / spacing).round() as usize).max(1))
                     .collect()
             })
@@ -111,6 +117,27 @@ impl Garment {
             let n = segments[a.panel][a.edge].max(segments[b.panel][b.edge]);
             segments[a.panel][a.edge] = n;
             segments[b.panel][b.edge] = n;
+        }
+        // An outline this long is a mistake (a stray control point, a unit slip), and sampling
+        // it would exhaust memory before the particle budget, which counts area, could object.
+        let total = (segments.iter().flatten()).fold(0usize, |a, &b| a.saturating_add(b));
+        if total > MAX_OUTLINE_PARTICLES {
+            let (pi, ei) = (0..pattern.panels.len())
+                .flat_map(|p| (0..segments[p].len()).map(move |e| (p, e)))
+                .max_by_key(|&(p, e)| segments[p][e])
+                .expect("a pattern with panels");
+            let panel = &pattern.panels[pi];
+            return Err(err(
+                format!("panel '{}', edge {ei}", panel.name),
+                format!(
+                    "the outlines need {total} particles at particle_distance_m = {:.4} (this \
+                     edge is {:.3e} m long), more than {MAX_OUTLINE_PARTICLES}",
+                    options.particle_distance,
+                    panel.edges[ei].curve.length() / unit
+                ),
+                "check the edge's vertices and curvature control points, and the pattern's \
+                 units_in_meter, or use a coarser particle_distance_m",
+            ));
         }
         let mut positions = Vec::new();
         let mut uv = Vec::new();
