@@ -86,3 +86,22 @@ impl Camera {
         proj * view
     }
 }
+
+/// A preset that frames the cloth, or a fixed camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CameraChoice {
+    /// Frames the cloth's bounding box.
+    Preset(CameraPreset),
+    /// Fixed eye, target and field of view.
+    Custom(Camera),
+}
+
+impl CameraChoice {
+    /// The camera for a cloth inside `lo..hi` at aspect ratio `aspect`.
+    pub fn camera(self, lo: Vec3, hi: Vec3, aspect: f32) -> Camera {
+        match self {
+            CameraChoice::Preset(p) => p.framing(lo, hi, aspect),
+            CameraChoice::Custom(c) => c,
+        }
+    }
+}
