@@ -1,7 +1,7 @@
 //! An animated GIF of a run's written frames, played in real time and looping, with one fixed
 //! camera (framing every frame's cloth) so that the picture does not jump between frames.
 
-use super::previewer::{bounds, Look, Previewer};
+use super::previewer::{Look, Previewer};
 use crate::atomic_file::write_atomic;
 use crate::error::Error;
 use image::codecs::gif::{GifEncoder, Repeat};
@@ -37,7 +37,8 @@ pub fn write_gif(
     // One box around the cloth of every shown frame.
     let mut framing: Option<(glam::Vec3, glam::Vec3)> = None;
     for &n in &shown {
-        let (lo, hi) = bounds(&previewer.load(Some(n))?.1);
+        let (frame, cloth, _) = previewer.load(Some(n))?;
+        let (lo, hi) = previewer.framing_box(frame, &cloth);
         framing = Some(match framing {
             Some((a, b)) => (a.min(lo), b.max(hi)),
             None => (lo, hi),

@@ -28,9 +28,10 @@ pub struct LegendBox {
 }
 
 /// The text scale for an image `height` px tall: a 7-pixel glyph becomes about 2.2% of the
-/// height (21 px at 960, 42 px at 2160), never less than one pixel per font pixel.
+/// height (14 px at 600, 21 px at 960, 49 px at 2160), never less than one pixel per font
+/// pixel.
 pub fn text_scale(height: u32) -> u32 {
-    (height / 320).max(1)
+    ((height + 160) / 320).max(1)
 }
 
 /// Draws `legend` into the RGBA8 `pixels` of a `width × height` image and returns where. The

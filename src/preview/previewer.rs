@@ -284,6 +284,28 @@ impl<'a> Previewer<'a> {
         Ok(self.seams.as_deref().unwrap_or_default())
     }
 
+    /// The box a preset camera frames: the cloth, and the body where it lies near the cloth's
+    /// box (a T-shirt's head, a skirt's hips, not the whole mannequin).
+    pub fn framing_box(&self, frame: u32, cloth: &[Vec3]) -> (Vec3, Vec3) {
+        let (lo, hi) = bounds(cloth);
+        let Some((body, settings)) = &self.body else {
+            return (lo, hi);
+        };
+        // Up by 40% of the cloth's height (a T-shirt's head), elsewhere by 10% of its size.
+        let side = Vec3::splat(0.1 * (hi - lo).max_element());
+        let (near_lo, near_hi) = (lo - side, hi + side + Vec3::Y * 0.4 * (hi.y - lo.y));
+        let pose = settings.motion.at(frame as f32 / self.fps);
+        let near: Vec<Vec3> = (body.mesh.positions.iter())
+            .map(|p| pose.rotation * *p + pose.translation)
+            .filter(|p| p.cmpge(near_lo).all() && p.cmple(near_hi).all())
+            .collect();
+        if near.is_empty() {
+            return (lo, hi);
+        }
+        let (b_lo, b_hi) = bounds(&near);
+        (lo.min(b_lo), hi.max(b_hi))
+    }
+
     /// Renders frame `n` (`None`: the last) as RGBA8 sRGB pixels of `look.size`. A preset
     /// camera frames `framing` when given (a fixed box for an animation), else the cloth.
     pub fn image(
@@ -295,7 +317,7 @@ impl<'a> Previewer<'a> {
         let (frame, positions, triangles) = self.load(n)?;
         let (cloth, legend) = self.cloth(frame, &positions, &triangles, look)?;
         let (w, h) = look.size;
-        let (lo, hi) = framing.unwrap_or_else(|| bounds(&positions));
+        let (lo, hi) = framing.unwrap_or_else(|| self.framing_box(frame, &positions));
         let camera = look.camera.camera(lo, hi, w as f32 / h as f32);
         let mut meshes = vec![cloth];
         if look.seams {
