@@ -40,8 +40,8 @@ pub fn draw_legend(pixels: &mut [u8], width: u32, height: u32, legend: &Legend) 
     let s = text_scale(height);
     let pad = 3 * s;
     let bar_w = 8 * s;
-    // Short ticks, set apart from the labels, so that they do not read as minus signs.
-    let tick = s.max(2);
+    // Ticks set apart from the labels by `pad`, so that they do not read as minus signs.
+    let tick = 2 * s;
     let label_w = (legend.ticks.iter())
         .map(|(_, l)| text_width(l, s))
         .max()
