@@ -55,6 +55,7 @@ enum Command {
         Examples:\n  \
         drapekit preview out/tshirt_drape_cotton --out shirt.png\n  \
         drapekit preview out/tshirt_drape_cotton --mode strain --strain-max 0.1 --seams --out strain.png\n  \
+        drapekit preview out/tshirt_drape_cotton --checker 0.05 --out grain.png\n  \
         drapekit preview out/drape_sphere --frame 0 --camera front --size 3840x2160 --out big.png"
     )]
     Preview {
@@ -82,6 +83,10 @@ enum Command {
         /// Leave out the colour legend of the strain and penetration modes.
         #[arg(long)]
         no_legend: bool,
+        /// A checker over the pattern coordinates with squares this many metres wide, to see
+        /// grain and distortion (default: the scene's [preview] checker_m, else none).
+        #[arg(long)]
+        checker: Option<f32>,
         /// Image size, WIDTHxHEIGHT in pixels (default: the scene's [preview] size, else
         /// 1280x960).
         #[arg(long, value_parser = parse_size)]
@@ -301,10 +306,19 @@ fn execute(command: Command) -> Result<(), Error> {
             strain_max,
             seams,
             no_legend,
+            checker,
             size,
             adapter,
             out,
         } => {
+            if let Some(c) = checker.filter(|c| !(c.is_finite() && *c > 0.0 && *c <= 10.0)) {
+                return Err(Error::Input(drapekit::error::InputError::new(
+                    std::path::Path::new("--checker"),
+                    "",
+                    format!("{c} m is not a square size"),
+                    "give the checker's square size in m, from 0.001 to 10, e.g. 0.05",
+                )));
+            }
             let adjust = |look: &mut drapekit::preview::Look| {
                 if let Some(c) = camera {
                     look.camera = drapekit::preview::CameraChoice::Preset(c);
@@ -316,6 +330,9 @@ fn execute(command: Command) -> Result<(), Error> {
                     look.size = s;
                 }
                 look.seams |= seams;
+                if let Some(c) = checker {
+                    look.checker = c;
+                }
                 look.legend = !no_legend;
             };
             drapekit::preview::preview_run(&run, frame, mode, &adapter, adjust, &out)?;

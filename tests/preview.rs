@@ -231,6 +231,8 @@ fn strain_colours_of_a_stretched_sheet_follow_the_colour_map() {
         strain_max: 0.2,
         seams: false,
         legend: false,
+        colors: Vec::new(),
+        checker: 0.0,
     };
     let pixels = previewer.image(Some(1), &look, None).unwrap();
     // The sheet spans x in [-0.525, 0.575] at y 1.0..1.6; sample well inside each half.
@@ -521,5 +523,86 @@ fn a_run_writes_previews_every_n_frames_and_an_animation() {
         .filter(|p| p[1] as i32 > p[0] as i32 + 30 && p[1] as i32 > p[2] as i32 + 30)
         .count();
     assert!(green > 50, "{green} green pixels");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn fabric_mode_colours_each_panel_and_lays_a_checker_over_the_pattern() {
+    if common::gpu().is_none() {
+        return;
+    }
+    // The sheet as two panels (left and right of x = 0) with pattern coordinates u = x + 0.5,
+    // v = y − 1 in m, as drapekit writes garment frames.
+    let m = sheet(Vec3::ONE);
+    let mut text = String::new();
+    for p in &m.positions {
+        text += &format!("v {} {} {}\n", p.x, p.y, p.z);
+    }
+    for p in &m.positions {
+        text += &format!("vt {} {}\n", p.x + 0.5, p.y - 1.0);
+    }
+    for (name, left) in [("left", true), ("right", false)] {
+        text += &format!("g {name}\n");
+        for t in &m.triangles {
+            let cx: f32 = t.iter().map(|&i| m.positions[i as usize].x).sum();
+            if (cx < 0.0) == left {
+                let [a, b, c] = t.map(|i| i + 1);
+                text += &format!("f {a}/{a} {b}/{b} {c}/{c}\n");
+            }
+        }
+    }
+    let dir = std::env::temp_dir().join(format!("drapekit-panels-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("frame_0000.obj"), text).unwrap();
+    let frame = drapekit::preview::read_obj(&dir.join("frame_0000.obj")).unwrap();
+    assert_eq!(frame.uv.len(), m.positions.len());
+    assert_eq!(*frame.groups.iter().max().unwrap(), 1);
+    let mut previewer = Previewer::new(&dir, None, 24.0, &AdapterChoice::Fallback).unwrap();
+    let (w, h) = (200u32, 150u32);
+    let look = Look {
+        camera: CameraChoice::Preset(CameraPreset::Front),
+        mode: ColorMode::Fabric,
+        size: (w, h),
+        strain_max: 0.2,
+        seams: false,
+        legend: true,
+        colors: Vec::new(),
+        checker: 0.1,
+    };
+    let pixels = previewer.image(None, &look, None).unwrap();
+    let camera = CameraPreset::Front.framing(
+        Vec3::new(-0.5, 1.0, 0.0),
+        Vec3::new(0.5, 1.6, 0.0),
+        4.0 / 3.0,
+    );
+    let vp = camera.view_proj(w as f32 / h as f32);
+    let at = |p: Vec3| {
+        let c = vp * p.extend(1.0);
+        let (x, y) = (
+            ((c.x / c.w + 1.0) * 0.5 * w as f32) as u32,
+            ((1.0 - c.y / c.w) * 0.5 * h as f32) as u32,
+        );
+        let k = 4 * (y * w + x) as usize;
+        [pixels[k], pixels[k + 1], pixels[k + 2]]
+    };
+    // Centres of checker squares (0.1 m): (u, v) cells (1, 3) and (7, 3) are light, (2, 3)
+    // dark (alternate squares are 30% darker); the panels take the palette's first two colours.
+    let palette = drapekit::preview::PALETTE;
+    for (x, color, shade) in [
+        (-0.35, palette[0], 1.0),
+        (-0.25, palette[0], 0.7),
+        (0.25, palette[1], 1.0),
+    ] {
+        let got = at(Vec3::new(x, 1.35, 0.0));
+        let want = (color * shade * facing_light()).to_array().map(srgb_byte);
+        // As for the strain colours: the GPU's f32 lighting and sRGB rounding, 3 levels.
+        for c in 0..3 {
+            assert!(
+                (got[c] as i32 - want[c] as i32).abs() <= 3,
+                "x = {x}: rendered {got:?}, expected {want:?}"
+            );
+        }
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -37,8 +37,8 @@ pub fn write_gif(
     // One box around the cloth of every shown frame.
     let mut framing: Option<(glam::Vec3, glam::Vec3)> = None;
     for &n in &shown {
-        let (frame, cloth, _) = previewer.load(Some(n))?;
-        let (lo, hi) = previewer.framing_box(frame, &cloth);
+        let f = previewer.load(Some(n))?;
+        let (lo, hi) = previewer.framing_box(f.number, &f.positions);
         framing = Some(match framing {
             Some((a, b)) => (a.min(lo), b.max(hi)),
             None => (lo, hi),

@@ -44,6 +44,29 @@ impl ColorMode {
 
 /// Linear RGB of the cloth in fabric mode (also its colour in the glTF export).
 pub const FABRIC: Vec3 = Vec3::new(0.10, 0.28, 0.62);
+/// Linear RGB of the panels in fabric mode, in pattern order (repeating): the fabric blue
+/// first, then hues far apart at similar lightness.
+pub const PALETTE: [Vec3; 8] = [
+    FABRIC,
+    Vec3::new(0.70, 0.38, 0.05),
+    Vec3::new(0.08, 0.40, 0.33),
+    Vec3::new(0.58, 0.13, 0.20),
+    Vec3::new(0.21, 0.42, 0.10),
+    Vec3::new(0.28, 0.18, 0.56),
+    Vec3::new(0.58, 0.23, 0.10),
+    Vec3::new(0.15, 0.25, 0.36),
+];
+
+/// The colour of panel `k`: from `colors` when given (repeating), else from `PALETTE`.
+pub fn panel_color(k: u32, colors: &[Vec3]) -> Vec3 {
+    let list = if colors.is_empty() {
+        &PALETTE[..]
+    } else {
+        colors
+    };
+    list[k as usize % list.len()]
+}
+
 /// Linear RGB of the body.
 pub const BODY: Vec3 = Vec3::new(0.62, 0.60, 0.58);
 /// Linear RGB of seam lines.

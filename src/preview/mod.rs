@@ -8,6 +8,7 @@ mod colors;
 mod during_run;
 mod font;
 mod legend;
+mod obj_frame;
 mod previewer;
 mod render;
 mod seams;
@@ -15,12 +16,13 @@ mod seams;
 pub use animation::{pick_frames, write_gif, MAX_ANIMATION_FRAMES};
 pub use camera::{Camera, CameraChoice, CameraPreset, PRESET_FOV_DEG};
 pub use colors::{
-    penetration_legend, strain_legend, strain_ramp, triangle_strain, ColorMode, Legend,
-    PenetrationScale, BODY, FABRIC, SEAM,
+    panel_color, penetration_legend, strain_legend, strain_ramp, triangle_strain, ColorMode,
+    Legend, PenetrationScale, BODY, FABRIC, PALETTE, SEAM,
 };
 pub use during_run::{RunPreviews, GIF_FILE};
 pub use legend::{draw_legend, srgb_byte, text_scale, LegendBox};
-pub use previewer::{read_obj, Look, Previewer};
+pub use obj_frame::{frames, read_obj, FrameMesh};
+pub use previewer::{Look, Previewer};
 pub use render::{render, DrawMesh, SHADER};
 pub use seams::seam_ribbons;
 
@@ -60,6 +62,8 @@ pub fn scene_look(scene: Option<&Scene>, mode: ColorMode) -> Look {
             strain_max: s.preview.strain_max,
             seams: s.preview.seams,
             legend: true,
+            colors: s.preview.colors.clone(),
+            checker: s.preview.checker.unwrap_or(0.0),
         },
         None => Look {
             camera: CameraChoice::Preset(CameraPreset::ThreeQuarter),
@@ -68,6 +72,8 @@ pub fn scene_look(scene: Option<&Scene>, mode: ColorMode) -> Look {
             strain_max: DEFAULT_STRAIN_MAX,
             seams: false,
             legend: true,
+            colors: Vec::new(),
+            checker: 0.0,
         },
     }
 }

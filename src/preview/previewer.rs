@@ -3,9 +3,11 @@
 
 use super::camera::CameraChoice;
 use super::colors::{
-    penetration_legend, strain_legend, triangle_strain, ColorMode, PenetrationScale, BODY, FABRIC,
+    panel_color, penetration_legend, strain_legend, strain_ramp, triangle_strain, ColorMode,
+    PenetrationScale, BODY, FABRIC,
 };
 use super::legend::draw_legend;
+use super::obj_frame::{frames, read_obj, FrameMesh};
 use super::render::{render, DrawMesh};
 use super::seams::{seam_ribbons, seam_segments};
 use crate::body::exact::ExactBody;
@@ -32,79 +34,14 @@ pub struct Look {
     pub seams: bool,
     /// Draw the colour legend of the strain and penetration modes.
     pub legend: bool,
+    /// Fabric colours per panel (linear RGB; empty: the built-in palette).
+    pub colors: Vec<Vec3>,
+    /// The checker's square size in pattern coordinates in m (0: none).
+    pub checker: f32,
 }
 
 pub(super) fn bad(path: &Path, problem: impl Into<String>, fix: impl Into<String>) -> Error {
     Error::Input(InputError::new(path, "", problem, fix))
-}
-
-/// The frames `frame_NNNN.obj` in a run folder, in order.
-pub fn frames(run: &Path) -> Result<Vec<(u32, PathBuf)>, Error> {
-    let entries = std::fs::read_dir(run).map_err(|e| Error::io(run, e))?;
-    let mut out: Vec<(u32, PathBuf)> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter_map(|p| {
-            let name = p.file_name()?.to_str()?;
-            let n = name
-                .strip_prefix("frame_")?
-                .strip_suffix(".obj")?
-                .parse()
-                .ok()?;
-            Some((n, p))
-        })
-        .collect();
-    out.sort();
-    Ok(out)
-}
-
-/// Positions (in file order, which is the particle order of drapekit's frames) and triangles
-/// (polygons as fans) of an OBJ file. Only `v` and `f` records are read.
-pub fn read_obj(path: &Path) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), Error> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let broken = |n: usize| {
-        bad(
-            path,
-            format!("line {}: not an OBJ vertex or face", n + 1),
-            "rerun drapekit run to rewrite the frame",
-        )
-    };
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for (n, line) in text.lines().enumerate() {
-        let mut words = line.split_whitespace();
-        match words.next() {
-            Some("v") => {
-                let xyz: Vec<f32> = words.take(3).filter_map(|w| w.parse().ok()).collect();
-                if xyz.len() != 3 {
-                    return Err(broken(n));
-                }
-                positions.push(Vec3::from_slice(&xyz));
-            }
-            Some("f") => {
-                let mut ids = Vec::new();
-                for w in words {
-                    let i: i64 = (w.split('/').next())
-                        .and_then(|s| s.parse().ok())
-                        .ok_or_else(|| broken(n))?;
-                    // 1-based, or negative: counted back from the last vertex.
-                    let i = if i < 0 {
-                        positions.len() as i64 + i
-                    } else {
-                        i - 1
-                    };
-                    if i < 0 || i >= positions.len() as i64 {
-                        return Err(broken(n));
-                    }
-                    ids.push(i as u32);
-                }
-                for k in 1..ids.len().saturating_sub(1) {
-                    triangles.push([ids[0], ids[k], ids[k + 1]]);
-                }
-            }
-            _ => {}
-        }
-    }
-    Ok((positions, triangles))
 }
 
 /// The bounding box of `points`.
@@ -114,9 +51,6 @@ pub fn bounds(points: &[Vec3]) -> (Vec3, Vec3) {
         |(lo, hi), p| (lo.min(*p), hi.max(*p)),
     )
 }
-
-/// A written frame: its number, the particles' positions and the triangles.
-pub type LoadedFrame = (u32, Vec<Vec3>, Vec<[u32; 3]>);
 
 /// Renders frames of one run folder.
 pub struct Previewer<'a> {
@@ -160,8 +94,8 @@ impl<'a> Previewer<'a> {
         Ok(frames(&self.run)?.into_iter().map(|(n, _)| n).collect())
     }
 
-    /// The frame `n` (`None`: the last), as its number, positions and triangles.
-    pub fn load(&self, n: Option<u32>) -> Result<LoadedFrame, Error> {
+    /// The frame `n` (`None`: the last).
+    pub fn load(&self, n: Option<u32>) -> Result<FrameMesh, Error> {
         let all = frames(&self.run)?;
         let found = match n {
             None => all.last().cloned(),
@@ -182,8 +116,9 @@ impl<'a> Previewer<'a> {
                 format!("use one of {have:?}"),
             ));
         };
-        let (p, t) = read_obj(&path)?;
-        Ok((k, p, t))
+        let mut m = read_obj(&path)?;
+        m.number = k;
+        Ok(m)
     }
 
     /// Frame 0, the strain's rest shape, read once.
@@ -191,7 +126,7 @@ impl<'a> Previewer<'a> {
         if self.rest.is_none() {
             let first = frames(&self.run)?.into_iter().next();
             let rest = match first {
-                Some((0, path)) => read_obj(&path)?.0,
+                Some((0, path)) => read_obj(&path)?.positions,
                 _ => Vec::new(),
             };
             self.rest = Some(rest);
@@ -210,30 +145,44 @@ impl<'a> Previewer<'a> {
     /// The cloth coloured by `look.mode`, and the legend that explains the colours.
     fn cloth(
         &mut self,
-        frame: u32,
-        positions: &[Vec3],
-        triangles: &[[u32; 3]],
+        f: &FrameMesh,
         look: &Look,
     ) -> Result<(DrawMesh, Option<super::colors::Legend>), Error> {
+        let mesh = |colors: Vec<Vec3>| DrawMesh {
+            positions: f.positions.clone(),
+            colors,
+            triangles: f.triangles.clone(),
+            uv: f.uv.clone(),
+            checker: look.checker,
+        };
         match look.mode {
-            ColorMode::Fabric => Ok((
-                DrawMesh {
-                    positions: positions.to_vec(),
-                    colors: vec![FABRIC; positions.len()],
-                    triangles: triangles.to_vec(),
-                },
-                None,
-            )),
+            ColorMode::Fabric => {
+                // Panels do not share particles, so a vertex takes any of its triangles' panel.
+                let mut colors = vec![FABRIC; f.positions.len()];
+                for (t, &g) in f.triangles.iter().zip(&f.groups) {
+                    for &i in t {
+                        colors[i as usize] = panel_color(g, &look.colors);
+                    }
+                }
+                Ok((mesh(colors), None))
+            }
             ColorMode::Strain => {
                 let max = look.strain_max;
-                let strain = triangle_strain(self.rest(positions.len())?, positions, triangles);
+                let rest = self.rest(f.positions.len())?;
+                let strain = triangle_strain(rest, &f.positions, &f.triangles);
                 // Flat colours per triangle: every triangle gets its own three vertices.
-                let mut m = DrawMesh::default();
-                for (t, s) in triangles.iter().zip(strain) {
+                let mut m = DrawMesh {
+                    checker: look.checker,
+                    ..Default::default()
+                };
+                for (t, s) in f.triangles.iter().zip(strain) {
                     let base = m.positions.len() as u32;
                     for &i in t {
-                        m.positions.push(positions[i as usize]);
-                        m.colors.push(super::colors::strain_ramp(s / max));
+                        m.positions.push(f.positions[i as usize]);
+                        m.colors.push(strain_ramp(s / max));
+                        if let Some(uv) = f.uv.get(i as usize) {
+                            m.uv.push(*uv);
+                        }
                     }
                     m.triangles.push([base, base + 1, base + 2]);
                 }
@@ -254,20 +203,13 @@ impl<'a> Previewer<'a> {
                     self.exact = Some(exact);
                 }
                 let exact = self.exact.as_ref().expect("built above");
-                let pose = settings.motion.at(frame as f32 / self.fps);
+                let pose = settings.motion.at(f.number as f32 / self.fps);
                 let inverse = pose.rotation.inverse();
                 let scale = PenetrationScale::for_thickness(settings.thickness);
-                let colors = (positions.iter())
+                let colors = (f.positions.iter())
                     .map(|p| scale.color(exact.query(inverse * (*p - pose.translation)).0))
                     .collect();
-                Ok((
-                    DrawMesh {
-                        positions: positions.to_vec(),
-                        colors,
-                        triangles: triangles.to_vec(),
-                    },
-                    Some(penetration_legend(scale)),
-                ))
+                Ok((mesh(colors), Some(penetration_legend(scale))))
             }
         }
     }
@@ -314,16 +256,17 @@ impl<'a> Previewer<'a> {
         look: &Look,
         framing: Option<(Vec3, Vec3)>,
     ) -> Result<Vec<u8>, Error> {
-        let (frame, positions, triangles) = self.load(n)?;
-        let (cloth, legend) = self.cloth(frame, &positions, &triangles, look)?;
+        let f = self.load(n)?;
+        let (frame, positions) = (f.number, &f.positions);
+        let (cloth, legend) = self.cloth(&f, look)?;
         let (w, h) = look.size;
-        let (lo, hi) = framing.unwrap_or_else(|| self.framing_box(frame, &positions));
+        let (lo, hi) = framing.unwrap_or_else(|| self.framing_box(frame, positions));
         let camera = look.camera.camera(lo, hi, w as f32 / h as f32);
         let mut meshes = vec![cloth];
         if look.seams {
             let segments = self.seam_segments()?.to_vec();
             let width_px = (h as f32 / 400.0).max(2.0);
-            meshes.push(seam_ribbons(&positions, &segments, &camera, h, width_px));
+            meshes.push(seam_ribbons(positions, &segments, &camera, h, width_px));
         }
         if let Some((body, settings)) = &self.body {
             let pose = settings.motion.at(frame as f32 / self.fps);
@@ -333,6 +276,7 @@ impl<'a> Previewer<'a> {
                     .collect(),
                 colors: vec![BODY; body.mesh.positions.len()],
                 triangles: body.mesh.triangles.clone(),
+                ..Default::default()
             });
         }
         let mut pixels = render(&self.ctx, &meshes, &camera, w, h)?;

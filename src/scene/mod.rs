@@ -19,7 +19,7 @@ pub use fabric::Fabric;
 pub use pins::{Corner, GridEdge, PinSelection};
 pub use presets::{preset, FabricPreset, PRESETS};
 pub use preview::{
-    CameraSetting, PreviewSettings, CAMERA_PRESETS, DEFAULT_STRAIN_MAX, PREVIEW_MODES,
+    hex_color, CameraSetting, PreviewSettings, CAMERA_PRESETS, DEFAULT_STRAIN_MAX, PREVIEW_MODES,
 };
 pub use self_collision::SelfCollision;
 pub use solver::{

@@ -51,6 +51,30 @@ pub struct PreviewSettings {
     pub animation: Option<String>,
     /// The animation's frame size in pixels.
     pub animation_size: (u32, u32),
+    /// Fabric colours per panel, in pattern order and repeating, as linear RGB (empty: the
+    /// built-in palette).
+    pub colors: Vec<Vec3>,
+    /// The checker's square size in pattern coordinates, in m (`None`: no checker).
+    pub checker: Option<f32>,
+}
+
+/// `"#rrggbb"` (sRGB) as linear RGB.
+pub fn hex_color(s: &str) -> Option<Vec3> {
+    let hex = s.strip_prefix('#').filter(|h| h.len() == 6)?;
+    let byte = |k: usize| u8::from_str_radix(hex.get(k..k + 2)?, 16).ok();
+    let linear = |b: u8| {
+        let c = b as f32 / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    Some(Vec3::new(
+        linear(byte(0)?),
+        linear(byte(2)?),
+        linear(byte(4)?),
+    ))
 }
 
 fn modes(c: &Checker, table: &str, key: &str, list: &[String]) -> Result<(), InputError> {
@@ -242,5 +266,21 @@ pub(super) fn parse(
         size: size(c, "size", p.size)?,
         animation,
         animation_size: size(c, "animation_size", p.animation_size)?,
+        colors: (p.colors.iter())
+            .map(|h| {
+                hex_color(h).ok_or_else(|| {
+                    c.err(
+                        "preview",
+                        "colors",
+                        format!("{h:?} is not a colour"),
+                        "write sRGB colours as \"#rrggbb\", e.g. [\"#5991ce\", \"#d9a441\"]",
+                    )
+                })
+            })
+            .collect::<Result<_, _>>()?,
+        checker: match p.checker_m {
+            None => None,
+            Some(v) => Some(c.within("preview", "checker_m", v, (1e-3, 10.0), "m")?),
+        },
     })
 }

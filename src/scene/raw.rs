@@ -320,6 +320,9 @@ pub(super) struct RawPreview {
     pub(super) animation: Option<String>,
     #[serde(default = "default_animation_size")]
     pub(super) animation_size: [i64; 2],
+    #[serde(default)]
+    pub(super) colors: Vec<String>,
+    pub(super) checker_m: Option<f64>,
 }
 
 impl Default for RawPreview {
@@ -331,6 +334,8 @@ impl Default for RawPreview {
             size: default_preview_size(),
             animation: None,
             animation_size: default_animation_size(),
+            colors: Vec::new(),
+            checker_m: None,
         }
     }
 }
