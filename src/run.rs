@@ -148,6 +148,7 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
     let last = stats.frames_run;
     if result.is_ok() && exporter.wants_frames() && !exporter.on_schedule(last) {
         outputs.extend(exporter.frame(last, &solver.state()?.positions)?);
+        previews.frame_written(last);
     }
     // The caches hold the frames written so far, also when the run stopped early.
     outputs.extend(exporter.finish()?);

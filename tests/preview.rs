@@ -205,6 +205,9 @@ fn a_run_writes_previews_every_n_frames_and_an_animation() {
     std::fs::create_dir_all(&dir).unwrap();
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, text).unwrap();
+    // A frame left by an earlier, longer run in the same folder is not this run's.
+    std::fs::create_dir_all(dir.join("run")).unwrap();
+    std::fs::write(dir.join("run/frame_0099.obj"), "v 0 0 0\n").unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_drapekit"))
         .args([
             "run",
@@ -252,7 +255,7 @@ fn a_run_writes_previews_every_n_frames_and_an_animation() {
         !outputs.contains(&"preview_fabric_0003.png"),
         "off the preview schedule"
     );
-    // The animation: every written frame (0, 3, …, 12), 96×72, each shown 3/24 s.
+    // The animation: every frame this run wrote (0, 3, …, 12), 96×72, each shown 3/24 s.
     let gif = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(
         std::fs::File::open(run.join("preview.gif")).unwrap(),
     ))

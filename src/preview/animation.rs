@@ -25,15 +25,16 @@ pub fn pick_frames(frames: &[u32], max: usize) -> Vec<u32> {
     out
 }
 
-/// Renders the run's written frames with `look` and writes them to `out` as a looping GIF whose
-/// frame delays follow the frames' simulated times at `fps`. Returns the frames shown.
+/// Renders the written `frames` (in order) with `look` and writes them to `out` as a looping
+/// GIF whose frame delays follow the frames' simulated times at `fps`. Returns the frames shown.
 pub fn write_gif(
     previewer: &mut Previewer,
+    frames: &[u32],
     look: &Look,
     fps: f32,
     out: &Path,
 ) -> Result<usize, Error> {
-    let shown = pick_frames(&previewer.frame_numbers()?, MAX_ANIMATION_FRAMES);
+    let shown = pick_frames(frames, MAX_ANIMATION_FRAMES);
     // One box around the cloth of every shown frame.
     let mut framing: Option<(glam::Vec3, glam::Vec3)> = None;
     for &n in &shown {

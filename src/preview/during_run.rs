@@ -22,6 +22,8 @@ pub struct RunPreviews<'a> {
     previewer: Option<Previewer<'a>>,
     /// Set after the first failure, so that one missing adapter gives one warning.
     failed: bool,
+    /// The frames this run wrote, in order (the folder may hold older ones from another run).
+    written: Vec<u32>,
     /// The files written.
     pub names: Vec<String>,
     /// Why previews are missing.
@@ -37,6 +39,7 @@ impl<'a> RunPreviews<'a> {
             dir: dir.to_path_buf(),
             previewer: None,
             failed: false,
+            written: Vec::new(),
             names: Vec::new(),
             warnings: Vec::new(),
         }
@@ -75,6 +78,7 @@ impl<'a> RunPreviews<'a> {
 
     /// After frame `frame`'s OBJ was written: the `[output] preview_every` previews.
     pub fn frame_written(&mut self, frame: u32) {
+        self.written.push(frame);
         let Some(every) = self.scene.preview.every else {
             return;
         };
@@ -95,12 +99,15 @@ impl<'a> RunPreviews<'a> {
     /// After the run: the last frame's previews and the animation. Returns the names of every
     /// preview written and the warnings.
     pub fn finish(mut self) -> (Vec<String>, Vec<String>) {
+        let Some(&last) = self.written.last() else {
+            return (self.names, self.warnings);
+        };
         for mode in self.scene.preview.last.clone() {
             let name = format!("preview_{mode}.png");
             let path = self.dir.join(&name);
             let look = scene_look(Some(self.scene), mode.parse().expect("validated at load"));
             self.with(&format!("preview {mode:?}"), |p| {
-                let pixels = p.image(None, &look, None)?;
+                let pixels = p.image(Some(last), &look, None)?;
                 write_png(&path, &pixels, look.size.0, look.size.1).map(|_| name)
             });
         }
@@ -112,8 +119,9 @@ impl<'a> RunPreviews<'a> {
             look.size = self.scene.preview.animation_size;
             let path = self.dir.join(GIF_FILE);
             let fps = self.scene.solver.fps;
+            let frames = self.written.clone();
             self.with("animation", |p| {
-                write_gif(p, &look, fps, &path).map(|_| GIF_FILE.to_string())
+                write_gif(p, &frames, &look, fps, &path).map(|_| GIF_FILE.to_string())
             });
         }
         (self.names, self.warnings)

@@ -89,11 +89,6 @@ impl<'a> Previewer<'a> {
         })
     }
 
-    /// The frame numbers written so far.
-    pub fn frame_numbers(&self) -> Result<Vec<u32>, Error> {
-        Ok(frames(&self.run)?.into_iter().map(|(n, _)| n).collect())
-    }
-
     /// The frame `n` (`None`: the last).
     pub fn load(&self, n: Option<u32>) -> Result<FrameMesh, Error> {
         let all = frames(&self.run)?;
