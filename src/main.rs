@@ -49,13 +49,15 @@ enum Command {
         drapekit info\n  \
         WGPU_ADAPTER_NAME=llvmpipe drapekit info   # what --adapter auto picks when told a name")]
     Info,
-    /// Render one frame of a finished run (the garment and the body) to a PNG.
+    /// Render one frame of a finished run (the garment and the body) to a PNG, or all of them
+    /// to a GIF.
     #[command(
         after_help = "Defaults come from the run's scene ([preview] table), then the options.\n\n\
         Examples:\n  \
         drapekit preview out/tshirt_drape_cotton --out shirt.png\n  \
         drapekit preview out/tshirt_drape_cotton --mode strain --strain-max 0.1 --seams --out strain.png\n  \
         drapekit preview out/tshirt_drape_cotton --checker 0.05 --out grain.png\n  \
+        drapekit preview out/skirt_rotating_implicit --camera front --out skirt.gif\n  \
         drapekit preview out/drape_sphere --frame 0 --camera front --size 3840x2160 --out big.png"
     )]
     Preview {
@@ -94,7 +96,8 @@ enum Command {
         /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
         #[arg(long, default_value = "auto")]
         adapter: AdapterChoice,
-        /// The PNG to write.
+        /// The PNG to write; a name ending in .gif writes every frame of the run as a looping
+        /// animation instead (default size: the scene's [preview] animation_size, else 480x360).
         #[arg(long)]
         out: PathBuf,
     },

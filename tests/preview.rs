@@ -153,6 +153,34 @@ fn a_cpu_run_can_be_previewed() {
         .unwrap();
     assert_eq!(missing.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("has no frame 999"));
+    // A .gif holds every frame (the run wrote 0 and 6), so --frame with one is bad input.
+    let preview = |extra: &[&str]| {
+        std::process::Command::new(bin)
+            .args(["preview", dir.join("run").to_str().unwrap()])
+            .args(["--adapter", "fallback", "--size", "64x48"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let gif = dir.join("run.gif");
+    let out = preview(&["--mode", "penetration", "--out", gif.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    use image::AnimationDecoder;
+    let frames = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(
+        std::fs::File::open(&gif).unwrap(),
+    ))
+    .unwrap()
+    .into_frames()
+    .collect_frames()
+    .unwrap();
+    assert_eq!(frames.len(), 2);
+    assert_eq!(frames[0].buffer().dimensions(), (64, 48));
+    let both = preview(&["--frame", "6", "--out", gif.to_str().unwrap()]);
+    assert_eq!(both.status.code(), Some(2));
     let _ = std::fs::remove_dir_all(&dir);
 }
 

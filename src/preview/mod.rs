@@ -101,8 +101,9 @@ pub fn run_scene_of(run: &Path) -> Result<(Option<Scene>, f32), Error> {
 }
 
 /// Renders frame `frame` (`None`: the last) of the run in `run` and writes it to `out` as a
-/// PNG. The look starts from the run's scene (`[preview]`) and `adjust` changes it (the
-/// command line's options).
+/// PNG; or, when `out` ends in `.gif`, every frame in the folder as an animation (at the
+/// scene's `[preview] animation_size` unless `adjust` sets a size). The look starts from the
+/// run's scene (`[preview]`) and `adjust` changes it (the command line's options).
 pub fn preview_run(
     run: &Path,
     frame: Option<u32>,
@@ -111,10 +112,35 @@ pub fn preview_run(
     adjust: impl FnOnce(&mut Look),
     out: &Path,
 ) -> Result<(), Error> {
+    let gif = out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gif"));
+    if gif && frame.is_some() {
+        return Err(bad(
+            out,
+            "a .gif shows every frame, and --frame picks one",
+            "leave out --frame, or write a .png",
+        ));
+    }
     let (scene, fps) = run_scene_of(run)?;
     let mut look = scene_look(scene.as_ref(), mode);
+    if gif {
+        look.size = scene
+            .as_ref()
+            .map_or((480, 360), |s| s.preview.animation_size);
+    }
     adjust(&mut look);
     let mut previewer = Previewer::new(run, scene.as_ref(), fps, adapter)?;
+    if gif {
+        let frames: Vec<u32> = obj_frame::frames(run)?
+            .into_iter()
+            .map(|(n, _)| n)
+            .collect();
+        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
+        return write_gif(&mut previewer, &frames, &look, fps, out).map(|_| ());
+    }
     let pixels = previewer.image(frame, &look, None)?;
     write_png(out, &pixels, look.size.0, look.size.1)
 }
