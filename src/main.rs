@@ -22,6 +22,9 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Simulate a scene and write OBJ frames and summary.json.
+    #[command(after_help = "Examples:\n  \
+        drapekit run fixtures/scenes/tshirt_drape_cotton.toml\n  \
+        drapekit run fixtures/scenes/drape_sphere.toml --backend cpu --frames 12 --out out/sphere --quiet")]
     Run {
         /// The scene file (TOML).
         scene: PathBuf,
@@ -57,31 +60,66 @@ enum Command {
         quiet: bool,
     },
     /// List the GPU adapters, the one `--adapter auto` picks, and the CPU.
+    #[command(after_help = "Example:\n  \
+        drapekit info\n  \
+        WGPU_ADAPTER_NAME=llvmpipe drapekit info   # what --adapter auto picks when told a name")]
     Info,
-    /// Render one frame of a finished run (the garment and the body) to a PNG.
+    /// Render one frame of a finished run (the garment and the body) to a PNG, or all of them
+    /// to a GIF.
+    #[command(
+        after_help = "Defaults come from the run's scene ([preview] table), then the options.\n\n\
+        Examples:\n  \
+        drapekit preview out/tshirt_drape_cotton --out shirt.png\n  \
+        drapekit preview out/tshirt_drape_cotton --mode strain --strain-max 0.1 --seams --out strain.png\n  \
+        drapekit preview out/tshirt_drape_cotton --checker 0.05 --out grain.png\n  \
+        drapekit preview out/skirt_rotating_implicit --camera front --out skirt.gif\n  \
+        drapekit preview out/drape_sphere --frame 0 --camera front --size 3840x2160 --out big.png"
+    )]
     Preview {
         /// The run's output folder (frame_NNNN.obj and summary.json).
         run: PathBuf,
         /// The frame (default: the last one written).
         #[arg(long)]
         frame: Option<u32>,
-        /// front, back, side or three-quarter.
-        #[arg(long, default_value = "three-quarter")]
-        camera: drapekit::preview::CameraPreset,
-        /// fabric, or strain (each triangle's stretch against frame 0, blue 0% to red 20%).
+        /// front, back, side or three-quarter (default: the scene's [preview] camera, else
+        /// three-quarter).
+        #[arg(long)]
+        camera: Option<drapekit::preview::CameraPreset>,
+        /// fabric; strain (each triangle's stretch against frame 0, blue 0% to red at
+        /// --strain-max); or penetration (distance to the body: red inside, yellow within the
+        /// contact thickness, green beyond).
         #[arg(long, default_value = "fabric")]
         mode: drapekit::preview::ColorMode,
-        /// Image size, WIDTHxHEIGHT in pixels.
-        #[arg(long, default_value = "1280x960", value_parser = parse_size)]
-        size: (u32, u32),
+        /// The strain shown in full red, as a fraction: 0.2 = 20% (default: the scene's
+        /// [preview] strain_max, else 0.2).
+        #[arg(long, value_parser = parse_strain_max)]
+        strain_max: Option<f32>,
+        /// Draw the garment's seams as dark lines (also on with [preview] seams = true).
+        #[arg(long)]
+        seams: bool,
+        /// Leave out the colour legend of the strain and penetration modes.
+        #[arg(long)]
+        no_legend: bool,
+        /// A checker over the pattern coordinates with squares this many metres wide, to see
+        /// grain and distortion (default: the scene's [preview] checker_m, else none).
+        #[arg(long)]
+        checker: Option<f32>,
+        /// Image size, WIDTHxHEIGHT in pixels (default: the scene's [preview] size, else
+        /// 1280x960).
+        #[arg(long, value_parser = parse_size)]
+        size: Option<(u32, u32)>,
         /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
         #[arg(long, default_value = "auto")]
         adapter: AdapterChoice,
-        /// The PNG to write.
+        /// The PNG to write; a name ending in .gif writes every frame of the run as a looping
+        /// animation instead (default size: the scene's [preview] animation_size, else 480x360).
         #[arg(long)]
         out: PathBuf,
     },
     /// Print the pass plan a scene compiles to.
+    #[command(after_help = "Examples:\n  \
+        drapekit plan fixtures/scenes/tshirt_drape_cotton.toml\n  \
+        drapekit plan fixtures/scenes/flag_wind.toml --json")]
     Plan {
         /// The scene file (TOML).
         scene: PathBuf,
@@ -90,6 +128,9 @@ enum Command {
         json: bool,
     },
     /// Time whole substeps on both backends and write CSV and Markdown tables.
+    #[command(after_help = "Examples:\n  \
+        drapekit bench --sizes 64,128 --repeats 3 --out out/bench\n  \
+        drapekit bench --scene fixtures/scenes/hanging_cloth.toml --frames 24 --out out/integrators")]
     Bench {
         /// Grid sizes: N means an N×N particle grid.
         #[arg(long, value_delimiter = ',', default_value = "64,128,256")]
@@ -132,6 +173,20 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
         }
     };
     Ok((side(w)?, side(h)?))
+}
+
+/// A strain as a fraction, from 0.001 to 5 (0.1% to 500%).
+fn parse_strain_max(s: &str) -> Result<f32, String> {
+    let v: f32 = s
+        .parse()
+        .map_err(|_| format!("{s:?} is not a number; give a fraction, e.g. 0.2 for 20%"))?;
+    if (0.001..=5.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{v} is outside 0.001 to 5; give a fraction, e.g. 0.2 for 20%"
+        ))
+    }
 }
 
 fn main() -> ExitCode {
@@ -196,6 +251,8 @@ fn execute(command: Command) -> Result<(), Error> {
                 None => println!("--adapter auto finds none: {}", info.auto_reason),
             }
             println!("cpu: {}", drapekit::bench::cpu_description());
+            let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+            println!("cpu threads: {threads} available (the CPU backend uses one)");
             Ok(())
         }
         Command::Plan { scene, json } => {
@@ -249,18 +306,39 @@ fn execute(command: Command) -> Result<(), Error> {
             frame,
             camera,
             mode,
+            strain_max,
+            seams,
+            no_legend,
+            checker,
             size,
             adapter,
             out,
         } => {
-            let options = drapekit::preview::PreviewOptions {
-                frame,
-                camera,
-                mode,
-                size,
-                adapter,
+            if let Some(c) = checker.filter(|c| !(c.is_finite() && *c > 0.0 && *c <= 10.0)) {
+                return Err(Error::Input(drapekit::error::InputError::new(
+                    std::path::Path::new("--checker"),
+                    "",
+                    format!("{c} m is not a square size"),
+                    "give the checker's square size in m, from 0.001 to 10, e.g. 0.05",
+                )));
+            }
+            let adjust = |look: &mut drapekit::preview::Look| {
+                if let Some(c) = camera {
+                    look.camera = drapekit::preview::CameraChoice::Preset(c);
+                }
+                if let Some(m) = strain_max {
+                    look.strain_max = m;
+                }
+                if let Some(s) = size {
+                    look.size = s;
+                }
+                look.seams |= seams;
+                if let Some(c) = checker {
+                    look.checker = c;
+                }
+                look.legend = !no_legend;
             };
-            drapekit::preview::preview_run(&run, &options, &out)?;
+            drapekit::preview::preview_run(&run, frame, mode, &adapter, adjust, &out)?;
             println!("wrote {}", out.display());
             Ok(())
         }

@@ -8,7 +8,7 @@ use crate::export::Exporter;
 use crate::gpu::{AdapterChoice, GpuContext, GpuSolver};
 use crate::model::layout::{INTEGRATOR_EXPLICIT, INTEGRATOR_IMPLICIT};
 use crate::output::Summary;
-use crate::preview::{render_frame, PreviewOptions};
+use crate::preview::RunPreviews;
 use crate::scene::Scene;
 use crate::sim::{prepare, simulate_from, Prepared, ResumeFrom, RunStats};
 use crate::solver::Solver;
@@ -241,6 +241,7 @@ fn run_scene_from(
         }
         .write(&out_dir)
     };
+    let mut previews = RunPreviews::new(&scene, &opts.adapter, &out_dir);
     let bar = progress_bar(opts.progress, prep.frames);
     let particle_substeps = prep.model.len() as f64 * prep.substeps as f64;
     let started = std::time::Instant::now();
@@ -252,6 +253,7 @@ fn run_scene_from(
         |frame, state, stats| {
             if exporter.wants_frames() && exporter.on_schedule(frame) {
                 outputs.extend(exporter.frame(frame, &state.positions)?);
+                bar.suspend(|| previews.frame_written(frame));
             }
             let interrupted = INTERRUPTED.load(Ordering::SeqCst);
             let due = opts
@@ -284,6 +286,7 @@ fn run_scene_from(
     let last = stats.frames_run;
     if result.is_ok() && exporter.wants_frames() && !exporter.on_schedule(last) {
         outputs.extend(exporter.frame(last, &solver.state()?.positions)?);
+        previews.frame_written(last);
     }
     let checkpoint_name = crate::checkpoint::CHECKPOINT_FILE.to_string();
     if out_dir.join(&checkpoint_name).is_file() && !outputs.contains(&checkpoint_name) {
@@ -291,13 +294,13 @@ fn run_scene_from(
     }
     // The caches hold the frames written so far, also when the run stopped early.
     outputs.extend(exporter.finish()?);
-    if result.is_ok() {
-        outputs.extend(write_previews(
-            &scene,
-            &opts.adapter,
-            &out_dir,
-            &mut warnings,
-        ));
+    if result.is_ok() && previews.wanted() {
+        let (names, missing) = previews.finish();
+        outputs.extend(names);
+        warnings.extend(missing);
+    } else {
+        warnings.extend(previews.warnings);
+        outputs.extend(previews.names);
     }
     outputs.push("summary.json".to_string());
     let substeps_run = stats.frames_run as f64 * prep.substeps as f64;
@@ -383,47 +386,6 @@ fn run_scene_from(
     result.map(|_| summary)
 }
 
-/// Renders the scene's `[output] previews` of the last frame as `preview_<mode>.png` and returns
-/// their names. A preview that cannot be rendered (no adapter at all) is a warning, not a
-/// failed run: the frames and the summary are the results.
-fn write_previews(
-    scene: &Scene,
-    adapter: &AdapterChoice,
-    out_dir: &std::path::Path,
-    warnings: &mut Vec<String>,
-) -> Vec<String> {
-    let mut names = Vec::new();
-    for mode in &scene.output.previews {
-        let options = PreviewOptions {
-            frame: None,
-            camera: scene
-                .output
-                .preview_camera
-                .parse()
-                .expect("validated at load"),
-            mode: mode.parse().expect("validated at load"),
-            size: (1280, 960),
-            adapter: adapter.clone(),
-        };
-        let name = format!("preview_{mode}.png");
-        match render_frame(
-            out_dir,
-            Some(scene),
-            scene.solver.fps,
-            &options,
-            &out_dir.join(&name),
-        ) {
-            Ok(()) => names.push(name),
-            Err(e) => {
-                let w = format!("preview {mode:?} not rendered: {e}");
-                eprintln!("drapekit: warning: {w}");
-                warnings.push(w);
-            }
-        }
-    }
-    names
-}
-
 /// A frame counter with simulated time, throughput and the time left, on stderr; hidden when
 /// `show` is off or stderr is not a terminal (indicatif draws nothing then).
 fn progress_bar(show: bool, frames: u32) -> indicatif::ProgressBar {
@@ -432,7 +394,7 @@ fn progress_bar(show: bool, frames: u32) -> indicatif::ProgressBar {
     }
     let bar = indicatif::ProgressBar::new(frames as u64);
     bar.set_style(
-        indicatif::ProgressStyle::with_template("{bar:30} frame {pos}/{len}  {msg}  eta {eta}")
+        indicatif::ProgressStyle::with_template("{bar:30} frame {pos}/{len}  {msg}  {eta} left")
             .expect("a valid template"),
     );
     bar

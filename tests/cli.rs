@@ -397,6 +397,11 @@ fn info_lists_the_adapters_and_the_cpu() {
     let stdout = String::from_utf8_lossy(&r.stdout);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     assert!(stdout.contains("cpu: "), "{stdout}");
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    assert!(
+        stdout.contains(&format!("cpu threads: {threads} available")),
+        "{stdout}"
+    );
     if common::gpu().is_some() {
         assert!(
             stdout.contains("adapter: ") && stdout.contains("--adapter auto picks"),
@@ -453,5 +458,19 @@ fn tshirt_drape_cotton_sews_rests_and_stays_out_of_the_body() {
         if common::gpu().is_some() {
             assert!(path.is_file(), "{name} missing");
         }
+    }
+}
+
+#[test]
+fn every_subcommand_help_shows_an_example() {
+    for sub in ["run", "info", "preview", "plan", "bench"] {
+        let out = drapekit(&[sub, "--help"]);
+        assert!(out.status.success(), "{sub} --help");
+        let text = String::from_utf8_lossy(&out.stdout);
+        // Each example is a full command line.
+        assert!(
+            text.contains("Example") && text.contains(&format!("drapekit {sub}")),
+            "{sub} --help has no example:\n{text}"
+        );
     }
 }

@@ -342,3 +342,26 @@ fn check_glb(path: &Path, frames: &[Obj], triangles: &[[u32; 3]], times: &[f32])
         });
     Glb { uv, body_rotations }
 }
+
+#[test]
+fn formats_pc2_alone_writes_the_cache_beside_a_rest_obj() {
+    let path = common::fixture("scenes/drape_sphere.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let text = text.replace("obj = true\nevery = 6", "formats = [\"pc2\"]\nevery = 1");
+    let scene = Scene::parse(&text, &path).unwrap();
+    assert!(!scene.output.obj && scene.output.pc2 && !scene.output.gltf);
+    let out = out_dir("formats-pc2");
+    run_scene(&scene, &options(&out, 2)).unwrap();
+    let names = outputs(&out);
+    assert!(names.contains(&"rest.obj".into()) && names.contains(&"cloth.pc2".into()));
+    assert!(!names.iter().any(|n| n.starts_with("frame_")), "{names:?}");
+    // The rest pose is the first sample, vertex for vertex.
+    let rest = read_obj(&out.join("rest.obj"));
+    let (samples, _, _, data) = read_pc2(&out.join("cloth.pc2"));
+    assert_eq!(samples, 3);
+    assert!(data[0] == rest.v);
+    // The older switches and the list together are refused, naming the key.
+    let both = text.replace("formats = [\"pc2\"]", "formats = [\"pc2\"]\ngltf = true");
+    let e = Scene::parse(&both, &path).unwrap_err().to_string();
+    assert!(e.contains("output.gltf"), "{e}");
+}

@@ -1,40 +1,18 @@
-//! Previews: the renderer draws what the camera predicts, strain colours measure stretch, and a
-//! CPU-backend run can be previewed from the command line.
+//! Previews: the renderer draws what the camera predicts, strain measures stretch, seam lines
+//! show, a CPU-backend run can be previewed from the command line, and a run writes its
+//! previews as it goes and an animation at the end. Colours, legends and the golden image are
+//! in `preview_colors.rs`.
 
 mod common;
 
-use drapekit::preview::{render, triangle_strain, CameraPreset, DrawMesh};
+use drapekit::preview::{render, triangle_strain, CameraPreset};
 use glam::{Vec3, Vec4Swizzles};
-
-/// A 1 m × 0.6 m sheet in the xy plane at z = 0, 20 × 12 quads.
-fn sheet(color: Vec3) -> DrawMesh {
-    let (nx, ny) = (21u32, 13u32);
-    let mut m = DrawMesh::default();
-    for j in 0..ny {
-        for i in 0..nx {
-            m.positions.push(Vec3::new(
-                i as f32 / (nx - 1) as f32 - 0.5,
-                0.6 * j as f32 / (ny - 1) as f32 + 1.0,
-                0.0,
-            ));
-            m.colors.push(color);
-        }
-    }
-    for j in 0..ny - 1 {
-        for i in 0..nx - 1 {
-            let a = j * nx + i;
-            m.triangles.push([a, a + 1, a + nx + 1]);
-            m.triangles.push([a, a + nx + 1, a + nx]);
-        }
-    }
-    m
-}
 
 #[test]
 fn the_sheet_covers_the_rectangle_its_corners_project_to() {
     let Some(ctx) = common::gpu() else { return };
     let red = Vec3::new(0.9, 0.05, 0.05);
-    let mesh = sheet(red);
+    let mesh = common::sheet(red);
     let (w, h) = (320u32, 240u32);
     let (lo, hi) = (Vec3::new(-0.5, 1.0, 0.0), Vec3::new(0.5, 1.6, 0.0));
     let camera = CameraPreset::Front.framing(lo, hi, w as f32 / h as f32);
@@ -83,7 +61,7 @@ fn the_sheet_covers_the_rectangle_its_corners_project_to() {
 
 #[test]
 fn strain_of_a_stretched_sheet_is_its_stretch() {
-    let rest = sheet(Vec3::ONE);
+    let rest = common::sheet(Vec3::ONE);
     // 10% along x, 0% along y: the largest principal stretch is 1.1.
     let now: Vec<Vec3> = rest
         .positions
@@ -175,5 +153,160 @@ fn a_cpu_run_can_be_previewed() {
         .unwrap();
     assert_eq!(missing.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("has no frame 999"));
+    // A .gif holds every frame (the run wrote 0 and 6), so --frame with one is bad input.
+    let preview = |extra: &[&str]| {
+        std::process::Command::new(bin)
+            .args(["preview", dir.join("run").to_str().unwrap()])
+            .args(["--adapter", "fallback", "--size", "64x48"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let gif = dir.join("run.gif");
+    let out = preview(&["--mode", "penetration", "--out", gif.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    use image::AnimationDecoder;
+    let frames = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(
+        std::fs::File::open(&gif).unwrap(),
+    ))
+    .unwrap()
+    .into_frames()
+    .collect_frames()
+    .unwrap();
+    assert_eq!(frames.len(), 2);
+    assert_eq!(frames[0].buffer().dimensions(), (64, 48));
+    let both = preview(&["--frame", "6", "--out", gif.to_str().unwrap()]);
+    assert_eq!(both.status.code(), Some(2));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn seam_lines_are_dark_thin_and_on_top() {
+    let Some(ctx) = common::gpu() else { return };
+    let white = Vec3::splat(0.8);
+    let mesh = common::sheet(white);
+    let (w, h) = (320u32, 240u32);
+    let (lo, hi) = (Vec3::new(-0.5, 1.0, 0.0), Vec3::new(0.5, 1.6, 0.0));
+    let camera = CameraPreset::Front.framing(lo, hi, w as f32 / h as f32);
+    // A seam along the sheet's middle row (row 6 of 13, y = 1.3), particle to particle.
+    let row: Vec<[u32; 2]> = (0..20).map(|i| [6 * 21 + i, 6 * 21 + i + 1]).collect();
+    let ribbons = drapekit::preview::seam_ribbons(&mesh.positions, &row, &camera, h, 2.0);
+    let pixels = render(ctx, &[mesh, ribbons], &camera, w, h).unwrap();
+    let vp = camera.view_proj(w as f32 / h as f32);
+    let c = vp * Vec3::new(0.0, 1.3, 0.0).extend(1.0);
+    let (x, y) = (
+        ((c.x / c.w + 1.0) * 0.5 * w as f32) as u32,
+        ((1.0 - c.y / c.w) * 0.5 * h as f32) as u32,
+    );
+    let lum = |x: u32, y: u32| {
+        let k = 4 * (y * w + x) as usize;
+        (pixels[k] as u32 + pixels[k + 1] as u32 + pixels[k + 2] as u32) / 3
+    };
+    // Some row within a pixel of the line is dark (the lit sheet is ~200), and 4 px away it
+    // is the sheet again: the line is drawn over the cloth, and thin.
+    let darkest = (y.saturating_sub(1)..=y + 1)
+        .map(|y| lum(x, y))
+        .min()
+        .unwrap();
+    assert!(darkest < 80, "seam pixel luminance {darkest}");
+    assert!(lum(x, y - 4) > 150 && lum(x, y + 4) > 150);
+}
+
+#[test]
+fn a_run_writes_previews_every_n_frames_and_an_animation() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let path = common::fixture("scenes/drape_sphere.toml");
+    let text = std::fs::read_to_string(&path).unwrap().replace(
+        "obj = true\nevery = 6",
+        "obj = true\nevery = 3\npreview_every = 6\npreview_modes = [\"fabric\", \"penetration\"]\n\
+         previews = [\"strain\"]\n\n[preview]\nsize = [160, 120]\nanimation = \"gif\"\n\
+         animation_size = [96, 72]\ncamera = { eye = [1.5, 1.5, 2.5], target = [0.0, 0.3, 0.0], fov_deg = 35 }",
+    );
+    let dir = std::env::temp_dir().join(format!("drapekit-preview-run-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, text).unwrap();
+    // A frame left by an earlier, longer run in the same folder is not this run's.
+    std::fs::create_dir_all(dir.join("run")).unwrap();
+    std::fs::write(dir.join("run/frame_0099.obj"), "v 0 0 0\n").unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--backend",
+            "cpu",
+            "--frames",
+            "12",
+        ])
+        .args([
+            "--adapter",
+            "fallback",
+            "--out",
+            dir.join("run").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let run = dir.join("run");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(run.join("summary.json")).unwrap()).unwrap();
+    let outputs: Vec<&str> = (summary["outputs"].as_array().unwrap().iter())
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    let mut want = vec![];
+    for f in [0, 6, 12] {
+        for m in ["fabric", "penetration"] {
+            want.push(format!("preview_{m}_{f:04}.png"));
+        }
+    }
+    want.push("preview_strain.png".into());
+    want.push("preview.gif".into());
+    for name in &want {
+        assert!(
+            outputs.contains(&name.as_str()),
+            "{name} not in {outputs:?}"
+        );
+        assert!(run.join(name).is_file(), "{name}");
+    }
+    assert!(
+        !outputs.contains(&"preview_fabric_0003.png"),
+        "off the preview schedule"
+    );
+    // The animation: every frame this run wrote (0, 3, …, 12), 96×72, each shown 3/24 s.
+    let gif = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(
+        std::fs::File::open(run.join("preview.gif")).unwrap(),
+    ))
+    .unwrap();
+    use image::AnimationDecoder;
+    let frames = gif.into_frames().collect_frames().unwrap();
+    assert_eq!(frames.len(), 5);
+    assert_eq!(frames[0].buffer().dimensions(), (96, 72));
+    let (num, den) = frames[0].delay().numer_denom_ms();
+    // GIF stores delays in centiseconds: 125 ms is kept as 120 or 130.
+    assert!(
+        (num as f32 / den as f32 - 125.0).abs() <= 5.0,
+        "{num}/{den} ms"
+    );
+    // The cloth rests on the sphere by frame 12: penetration colours show green (beyond the
+    // thickness) at least; a cloth all in one colour or none would mean no distances.
+    let img = image::open(run.join("preview_penetration_0012.png"))
+        .unwrap()
+        .to_rgba8();
+    let green = img
+        .pixels()
+        .filter(|p| p[1] as i32 > p[0] as i32 + 30 && p[1] as i32 > p[2] as i32 + 30)
+        .count();
+    assert!(green > 50, "{green} green pixels");
     let _ = std::fs::remove_dir_all(&dir);
 }

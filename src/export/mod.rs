@@ -19,6 +19,8 @@ use std::path::{Path, PathBuf};
 pub const PC2_FILE: &str = "cloth.pc2";
 /// The glTF binary's file name.
 pub const GLB_FILE: &str = "garment.glb";
+/// The rest-pose OBJ beside the point cache: the first written frame, in particle order.
+pub const REST_FILE: &str = "rest.obj";
 
 /// Writes a run's frames as they come and its caches at the end.
 pub struct Exporter<'a> {
@@ -94,6 +96,13 @@ impl<'a> Exporter<'a> {
                     names.push(name);
                 }
             }
+        }
+        if self.settings.pc2 && self.written == 0 {
+            // A PC2 file holds only points: DCC tools apply it to a mesh with the same vertex
+            // order, which this is (also when no OBJ frames are written).
+            let text = obj::cloth_obj(&positions, self.triangles, self.uv, &self.groups);
+            self.write(REST_FILE, text.as_bytes())?;
+            names.push(REST_FILE.to_string());
         }
         if self.settings.pc2 || self.settings.gltf {
             self.kept_frames.push(frame);

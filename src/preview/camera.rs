@@ -56,16 +56,31 @@ impl CameraPreset {
     }
 
     /// A camera that sees the whole box `lo..hi` at aspect ratio `aspect` (width / height),
-    /// with a 10% margin: the box's bounding sphere fits the narrower field of view.
+    /// looking at its centre from the preset's direction, as close as it can while every
+    /// corner stays inside the middle 1/1.1 of the image (a 10% margin at the tightest side).
     pub fn framing(self, lo: Vec3, hi: Vec3, aspect: f32) -> Camera {
         let center = 0.5 * (lo + hi);
-        let radius = (0.5 * (hi - lo).length()).max(1e-3);
-        let half_v = (0.5 * PRESET_FOV_DEG).to_radians();
-        let half_h = (half_v.tan() * aspect).atan();
-        let half = half_v.min(half_h);
-        let distance = 1.1 * radius / half.sin();
+        let dir = self.direction();
+        // The view's axes, as `look_at` builds them with +y up.
+        let right = (-dir).cross(Vec3::Y).normalize();
+        let up = right.cross(-dir);
+        let tan_v = (0.5 * PRESET_FOV_DEG).to_radians().tan() / 1.1;
+        let tan_h = tan_v * aspect;
+        let mut distance: f32 = 1e-3;
+        for k in 0..8 {
+            let corner = Vec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            ) - center;
+            // A corner `toward` the camera from the centre needs the eye that much further.
+            let toward = corner.dot(dir);
+            distance = distance
+                .max(toward + corner.dot(right).abs() / tan_h)
+                .max(toward + corner.dot(up).abs() / tan_v);
+        }
         Camera {
-            eye: center + distance * self.direction(),
+            eye: center + distance * dir,
             target: center,
             fov_deg: PRESET_FOV_DEG,
         }
@@ -84,5 +99,24 @@ impl Camera {
             100.0 * distance,
         );
         proj * view
+    }
+}
+
+/// A preset that frames the cloth, or a fixed camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CameraChoice {
+    /// Frames the cloth's bounding box.
+    Preset(CameraPreset),
+    /// Fixed eye, target and field of view.
+    Custom(Camera),
+}
+
+impl CameraChoice {
+    /// The camera for a cloth inside `lo..hi` at aspect ratio `aspect`.
+    pub fn camera(self, lo: Vec3, hi: Vec3, aspect: f32) -> Camera {
+        match self {
+            CameraChoice::Preset(p) => p.framing(lo, hi, aspect),
+            CameraChoice::Custom(c) => c,
+        }
     }
 }

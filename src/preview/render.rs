@@ -5,7 +5,7 @@ use super::camera::Camera;
 use crate::error::Error;
 use crate::gpu::GpuContext;
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 use wgpu::util::DeviceExt;
 
 /// One mesh to draw: positions, smooth normals and linear RGB colours per vertex.
@@ -17,6 +17,10 @@ pub struct DrawMesh {
     pub colors: Vec<Vec3>,
     /// Triangles.
     pub triangles: Vec<[u32; 3]>,
+    /// Pattern coordinates in m per vertex for the checker, or empty.
+    pub uv: Vec<Vec2>,
+    /// The checker's square size in m (0: no checker).
+    pub checker: f32,
 }
 
 impl DrawMesh {
@@ -32,6 +36,8 @@ struct Vertex {
     pos: [f32; 3],
     normal: [f32; 3],
     color: [f32; 3],
+    /// Pattern u, v in m and the checker's square size (0: none).
+    uv: [f32; 3],
 }
 
 /// Supersampling factor per axis.
@@ -61,11 +67,18 @@ pub fn render(
     let mut indices = Vec::new();
     for m in meshes {
         let base = vertices.len() as u32;
-        for ((p, n), c) in m.positions.iter().zip(m.normals()).zip(&m.colors) {
+        let textured = m.checker > 0.0 && m.uv.len() == m.positions.len();
+        for (k, ((p, n), c)) in (m.positions.iter().zip(m.normals()).zip(&m.colors)).enumerate() {
+            let uv = if textured {
+                [m.uv[k].x, m.uv[k].y, m.checker]
+            } else {
+                [0.0; 3]
+            };
             vertices.push(Vertex {
                 pos: p.to_array(),
                 normal: n.to_array(),
                 color: c.to_array(),
+                uv,
             });
         }
         indices.extend(m.triangles.iter().flat_map(|t| t.map(|i| i + base)));
@@ -80,7 +93,7 @@ pub fn render(
     let vbuf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("preview vertices"),
         contents: if vertices.is_empty() {
-            &[0u8; 36]
+            &[0u8; 48]
         } else {
             bytemuck::cast_slice(&vertices)
         },
@@ -160,7 +173,9 @@ pub fn render(
             buffers: &[Some(wgpu::VertexBufferLayout {
                 array_stride: std::mem::size_of::<Vertex>() as u64,
                 step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3],
+                attributes: &wgpu::vertex_attr_array![
+                    0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x3
+                ],
             })],
         },
         primitive: wgpu::PrimitiveState {

@@ -7,6 +7,7 @@ mod cloth;
 mod fabric;
 mod pins;
 mod presets;
+mod preview;
 mod raw;
 mod self_collision;
 mod solver;
@@ -17,6 +18,9 @@ pub use cloth::ClothSource;
 pub use fabric::Fabric;
 pub use pins::{Corner, GridEdge, PinSelection};
 pub use presets::{preset, FabricPreset, PRESETS};
+pub use preview::{
+    hex_color, CameraSetting, PreviewSettings, CAMERA_PRESETS, DEFAULT_STRAIN_MAX, PREVIEW_MODES,
+};
 pub use self_collision::SelfCollision;
 pub use solver::{
     OutputSettings, SolverSettings, INTEGRATOR_EXPLICIT, INTEGRATOR_IMPLICIT, INTEGRATOR_SYMPLECTIC,
@@ -75,6 +79,8 @@ pub struct Scene {
     pub solver: SolverSettings,
     /// Output settings.
     pub output: OutputSettings,
+    /// What the previews look like and when they are rendered.
+    pub preview: PreviewSettings,
 }
 
 impl Scene {
@@ -114,6 +120,7 @@ impl Scene {
         let wind = world::parse_wind(&c, &raw.wind)?;
         let solver = solver::parse_solver(&c, &raw.solver)?;
         let output = solver::parse_output(&c, path, &raw.output)?;
+        let preview = preview::parse(&c, &raw.output, raw.preview.as_ref(), output.obj)?;
         Ok(Scene {
             path: path.to_path_buf(),
             source: src.to_string(),
@@ -131,6 +138,7 @@ impl Scene {
             },
             solver,
             output,
+            preview,
         })
     }
 

@@ -17,6 +17,7 @@ pub(super) struct RawScene {
     pub(super) solver: RawSolver,
     #[serde(default)]
     pub(super) output: RawOutput,
+    pub(super) preview: Option<RawPreview>,
 }
 
 #[derive(Deserialize)]
@@ -264,41 +265,103 @@ fn default_max_substeps() -> i64 {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawOutput {
     pub(super) dir: Option<String>,
-    #[serde(default = "default_true")]
-    pub(super) obj: bool,
+    /// `None`: not given (true unless `formats` leaves it out).
+    pub(super) obj: Option<bool>,
     #[serde(default = "default_every")]
     pub(super) every: i64,
     #[serde(default)]
     pub(super) previews: Vec<String>,
-    #[serde(default = "default_preview_camera")]
-    pub(super) preview_camera: String,
+    pub(super) preview_camera: Option<String>,
+    pub(super) preview_every: Option<i64>,
     #[serde(default)]
-    pub(super) pc2: bool,
-    #[serde(default)]
-    pub(super) gltf: bool,
+    pub(super) preview_modes: Vec<String>,
+    pub(super) pc2: Option<bool>,
+    pub(super) gltf: Option<bool>,
+    pub(super) formats: Option<Vec<String>>,
 }
 
-fn default_preview_camera() -> String {
-    "three-quarter".into()
+fn default_every() -> i64 {
+    1
 }
 
 impl Default for RawOutput {
     fn default() -> Self {
         RawOutput {
             dir: None,
-            obj: true,
-            every: 1,
+            obj: None,
+            every: default_every(),
             previews: Vec::new(),
-            preview_camera: default_preview_camera(),
-            pc2: false,
-            gltf: false,
+            preview_camera: None,
+            preview_every: None,
+            preview_modes: Vec::new(),
+            pc2: None,
+            gltf: None,
+            formats: None,
         }
     }
 }
 
-fn default_true() -> bool {
-    true
+/// `camera = "front"` or `camera = { eye = [..], target = [..], fov_deg = 30 }`.
+#[derive(Deserialize)]
+#[serde(
+    untagged,
+    expecting = "camera takes a preset (\"front\", \"back\", \"side\", \"three-quarter\") or \
+                 { eye = [x, y, z], target = [x, y, z], fov_deg = 30 } in m and degrees"
+)]
+pub(super) enum RawCamera {
+    Preset(String),
+    Custom {
+        eye: [f64; 3],
+        target: [f64; 3],
+        #[serde(default = "default_fov")]
+        fov_deg: f64,
+    },
 }
-fn default_every() -> i64 {
-    1
+
+fn default_fov() -> f64 {
+    30.0
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawPreview {
+    pub(super) camera: Option<RawCamera>,
+    #[serde(default = "default_strain_max")]
+    pub(super) strain_max: f64,
+    #[serde(default)]
+    pub(super) seams: bool,
+    #[serde(default = "default_preview_size")]
+    pub(super) size: [i64; 2],
+    pub(super) animation: Option<String>,
+    #[serde(default = "default_animation_size")]
+    pub(super) animation_size: [i64; 2],
+    #[serde(default)]
+    pub(super) colors: Vec<String>,
+    pub(super) checker_m: Option<f64>,
+}
+
+impl Default for RawPreview {
+    fn default() -> Self {
+        RawPreview {
+            camera: None,
+            strain_max: default_strain_max(),
+            seams: false,
+            size: default_preview_size(),
+            animation: None,
+            animation_size: default_animation_size(),
+            colors: Vec::new(),
+            checker_m: None,
+        }
+    }
+}
+
+fn default_strain_max() -> f64 {
+    super::preview::DEFAULT_STRAIN_MAX as f64
+}
+fn default_preview_size() -> [i64; 2] {
+    [1280, 960]
+}
+/// Small enough that a GIF of a few dozen frames stays a few MB.
+fn default_animation_size() -> [i64; 2] {
+    [480, 360]
 }

@@ -58,11 +58,7 @@ pub struct OutputSettings {
     pub obj: bool,
     /// Write every n-th frame.
     pub every: u32,
-    /// Preview modes rendered of the last frame (`"fabric"`, `"strain"`).
-    pub previews: Vec<String>,
-    /// The previews' camera preset.
-    pub preview_camera: String,
-    /// Write the written frames as a PC2 point cache, `cloth.pc2`.
+    /// Write the written frames as a PC2 point cache, `cloth.pc2`, beside `rest.obj`.
     pub pc2: bool,
     /// Write the written frames as an animated glTF binary, `garment.glb`.
     pub gltf: bool,
@@ -160,47 +156,55 @@ pub(super) fn parse_output(
     raw: &RawOutput,
 ) -> Result<OutputSettings, InputError> {
     let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
+    let (obj, pc2, gltf) = formats(c, raw)?;
     Ok(OutputSettings {
         dir: raw
             .dir
             .as_ref()
             .map(PathBuf::from)
             .unwrap_or_else(|| Path::new("out").join(stem)),
-        obj: raw.obj,
         every: c.count("output", "every", raw.every, 1)?,
-        previews: {
-            for mode in &raw.previews {
-                if !["fabric", "strain"].contains(&mode.as_str()) {
-                    return Err(c.err(
-                        "output",
-                        "previews",
-                        format!("unknown preview mode {mode:?}"),
-                        "use \"fabric\" and/or \"strain\"",
-                    ));
-                }
-            }
-            if !raw.previews.is_empty() && !raw.obj {
-                return Err(c.err(
-                    "output",
-                    "previews",
-                    "previews are rendered from the OBJ frames, and obj = false",
-                    "set obj = true, or remove previews",
-                ));
-            }
-            raw.previews.clone()
-        },
-        preview_camera: match raw.preview_camera.as_str() {
-            "front" | "back" | "side" | "three-quarter" => raw.preview_camera.clone(),
+        obj,
+        pc2,
+        gltf,
+    })
+}
+
+/// The export formats: `formats = ["obj", "glb", "pc2"]`, or the older switches `obj` (default
+/// on), `pc2` and `gltf`. Giving both spellings is refused, so that neither silently wins.
+fn formats(c: &Checker, raw: &RawOutput) -> Result<(bool, bool, bool), InputError> {
+    let Some(list) = &raw.formats else {
+        return Ok((
+            raw.obj.unwrap_or(true),
+            raw.pc2.unwrap_or(false),
+            raw.gltf.unwrap_or(false),
+        ));
+    };
+    for (key, given) in [("obj", raw.obj), ("pc2", raw.pc2), ("gltf", raw.gltf)] {
+        if given.is_some() {
+            return Err(c.err(
+                "output",
+                key,
+                format!("both formats and {key} choose the exports"),
+                format!("remove {key} and list the exports in formats only"),
+            ));
+        }
+    }
+    let mut chosen = (false, false, false);
+    for f in list {
+        match f.as_str() {
+            "obj" => chosen.0 = true,
+            "pc2" => chosen.1 = true,
+            "glb" | "gltf" => chosen.2 = true,
             other => {
                 return Err(c.err(
                     "output",
-                    "preview_camera",
-                    format!("unknown camera {other:?}"),
-                    "use front, back, side or three-quarter",
+                    "formats",
+                    format!("unknown export format {other:?}"),
+                    "use any of \"obj\", \"glb\", \"pc2\" (or [] for summary.json only)",
                 ))
             }
-        },
-        pc2: raw.pc2,
-        gltf: raw.gltf,
-    })
+        }
+    }
+    Ok(chosen)
 }

@@ -103,3 +103,27 @@ pub fn fixture(rel: &str) -> std::path::PathBuf {
         .join("fixtures")
         .join(rel)
 }
+
+/// A 1 m × 0.6 m sheet in the xy plane at z = 0, 20 × 12 quads.
+pub fn sheet(color: glam::Vec3) -> drapekit::preview::DrawMesh {
+    let (nx, ny) = (21u32, 13u32);
+    let mut m = drapekit::preview::DrawMesh::default();
+    for j in 0..ny {
+        for i in 0..nx {
+            m.positions.push(glam::Vec3::new(
+                i as f32 / (nx - 1) as f32 - 0.5,
+                0.6 * j as f32 / (ny - 1) as f32 + 1.0,
+                0.0,
+            ));
+            m.colors.push(color);
+        }
+    }
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            let a = j * nx + i;
+            m.triangles.push([a, a + 1, a + nx + 1]);
+            m.triangles.push([a, a + nx + 1, a + nx]);
+        }
+    }
+    m
+}

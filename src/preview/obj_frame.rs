@@ -1,0 +1,113 @@
+//! Reading back the frames `drapekit run` wrote: `frame_NNNN.obj` with positions in particle
+//! order, pattern coordinates (`vt`, one per vertex) and one group per panel.
+
+use super::previewer::bad;
+use crate::error::Error;
+use glam::{Vec2, Vec3};
+use std::path::{Path, PathBuf};
+
+/// One frame's cloth.
+#[derive(Clone, Debug, Default)]
+pub struct FrameMesh {
+    /// The frame number.
+    pub number: u32,
+    /// Positions in file order (the particle order).
+    pub positions: Vec<Vec3>,
+    /// Triangles (polygons as fans).
+    pub triangles: Vec<[u32; 3]>,
+    /// Each triangle's group (panel) in order of first appearance; 0 without `g` records.
+    pub groups: Vec<u32>,
+    /// Pattern coordinates in m, one per vertex, or empty when the file has none.
+    pub uv: Vec<Vec2>,
+}
+
+/// The frames `frame_NNNN.obj` in a run folder, in order.
+pub fn frames(run: &Path) -> Result<Vec<(u32, PathBuf)>, Error> {
+    let entries = std::fs::read_dir(run).map_err(|e| Error::io(run, e))?;
+    let mut out: Vec<(u32, PathBuf)> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter_map(|p| {
+            let name = p.file_name()?.to_str()?;
+            let n = name
+                .strip_prefix("frame_")?
+                .strip_suffix(".obj")?
+                .parse()
+                .ok()?;
+            Some((n, p))
+        })
+        .collect();
+    out.sort();
+    Ok(out)
+}
+
+/// Reads the `v`, `vt`, `g` and `f` records of an OBJ file. `vt` are kept only when there is
+/// one per vertex, as drapekit writes them (`f a/a/a`).
+pub fn read_obj(path: &Path) -> Result<FrameMesh, Error> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let broken = |n: usize| {
+        bad(
+            path,
+            format!("line {}: not an OBJ vertex or face", n + 1),
+            "rerun drapekit run to rewrite the frame",
+        )
+    };
+    let mut m = FrameMesh::default();
+    let mut group_names: Vec<String> = Vec::new();
+    let mut group = 0u32;
+    for (n, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => {
+                let xyz: Vec<f32> = words.take(3).filter_map(|w| w.parse().ok()).collect();
+                if xyz.len() != 3 {
+                    return Err(broken(n));
+                }
+                m.positions.push(Vec3::from_slice(&xyz));
+            }
+            Some("vt") => {
+                let uv: Vec<f32> = words.take(2).filter_map(|w| w.parse().ok()).collect();
+                if uv.len() != 2 {
+                    return Err(broken(n));
+                }
+                m.uv.push(Vec2::from_slice(&uv));
+            }
+            Some("g") => {
+                let name = words.collect::<Vec<_>>().join(" ");
+                group = match group_names.iter().position(|g| *g == name) {
+                    Some(k) => k as u32,
+                    None => {
+                        group_names.push(name);
+                        group_names.len() as u32 - 1
+                    }
+                };
+            }
+            Some("f") => {
+                let mut ids = Vec::new();
+                for w in words {
+                    let i: i64 = (w.split('/').next())
+                        .and_then(|s| s.parse().ok())
+                        .ok_or_else(|| broken(n))?;
+                    // 1-based, or negative: counted back from the last vertex.
+                    let i = if i < 0 {
+                        m.positions.len() as i64 + i
+                    } else {
+                        i - 1
+                    };
+                    if i < 0 || i >= m.positions.len() as i64 {
+                        return Err(broken(n));
+                    }
+                    ids.push(i as u32);
+                }
+                for k in 1..ids.len().saturating_sub(1) {
+                    m.triangles.push([ids[0], ids[k], ids[k + 1]]);
+                    m.groups.push(group);
+                }
+            }
+            _ => {}
+        }
+    }
+    if m.uv.len() != m.positions.len() {
+        m.uv.clear();
+    }
+    Ok(m)
+}

@@ -1,0 +1,283 @@
+//! Rendering the frames of a run folder: reads `frame_NNNN.obj`, colours the cloth by mode, adds
+//! the body at its pose, the seams and the legend. One device and one body for many frames.
+
+use super::camera::CameraChoice;
+use super::colors::{
+    panel_color, penetration_legend, strain_legend, strain_ramp, triangle_strain, ColorMode,
+    PenetrationScale, BODY, FABRIC,
+};
+use super::legend::draw_legend;
+use super::obj_frame::{frames, read_obj, FrameMesh};
+use super::render::{render, DrawMesh};
+use super::seams::{seam_ribbons, seam_segments};
+use crate::body::exact::ExactBody;
+use crate::body::Body;
+use crate::error::{Error, InputError};
+use crate::gpu::{AdapterChoice, GpuContext};
+use crate::model::build_body;
+use crate::scene::{BodySettings, Scene};
+use glam::Vec3;
+use std::path::{Path, PathBuf};
+
+/// How one image looks.
+#[derive(Clone, Debug)]
+pub struct Look {
+    /// The camera.
+    pub camera: CameraChoice,
+    /// Colouring of the cloth.
+    pub mode: ColorMode,
+    /// Image width and height in pixels.
+    pub size: (u32, u32),
+    /// The strain shown in full red (0.2 = 20%).
+    pub strain_max: f32,
+    /// Draw the seams.
+    pub seams: bool,
+    /// Draw the colour legend of the strain and penetration modes.
+    pub legend: bool,
+    /// Fabric colours per panel (linear RGB; empty: the built-in palette).
+    pub colors: Vec<Vec3>,
+    /// The checker's square size in pattern coordinates in m (0: none).
+    pub checker: f32,
+}
+
+pub(super) fn bad(path: &Path, problem: impl Into<String>, fix: impl Into<String>) -> Error {
+    Error::Input(InputError::new(path, "", problem, fix))
+}
+
+/// The bounding box of `points`.
+pub fn bounds(points: &[Vec3]) -> (Vec3, Vec3) {
+    points.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    )
+}
+
+/// Renders frames of one run folder.
+pub struct Previewer<'a> {
+    ctx: GpuContext,
+    run: PathBuf,
+    scene: Option<&'a Scene>,
+    fps: f32,
+    body: Option<(Body, &'a BodySettings)>,
+    exact: Option<ExactBody>,
+    rest: Option<Vec<Vec3>>,
+    seams: Option<Vec<[u32; 2]>>,
+}
+
+impl<'a> Previewer<'a> {
+    /// A previewer of the frames in `run`, with `scene`'s body (if any) posed at each frame's
+    /// time (`fps` frames per second), rendering on `adapter`.
+    pub fn new(
+        run: &Path,
+        scene: Option<&'a Scene>,
+        fps: f32,
+        adapter: &AdapterChoice,
+    ) -> Result<Self, Error> {
+        let body = match scene.and_then(|s| s.body.as_ref().map(|b| (s, b))) {
+            Some((s, settings)) => Some((build_body(settings, &s.checker())?, settings)),
+            None => None,
+        };
+        Ok(Previewer {
+            ctx: GpuContext::new(adapter)?,
+            run: run.to_path_buf(),
+            scene,
+            fps,
+            body,
+            exact: None,
+            rest: None,
+            seams: None,
+        })
+    }
+
+    /// The frame `n` (`None`: the last).
+    pub fn load(&self, n: Option<u32>) -> Result<FrameMesh, Error> {
+        let all = frames(&self.run)?;
+        let found = match n {
+            None => all.last().cloned(),
+            Some(n) => all.iter().find(|(k, _)| *k == n).cloned(),
+        };
+        let Some((k, path)) = found else {
+            if all.is_empty() {
+                return Err(bad(
+                    &self.run,
+                    "holds no frame_NNNN.obj",
+                    "run with OBJ frames ([output] obj = true, or \"obj\" in formats)",
+                ));
+            }
+            let have: Vec<u32> = all.iter().map(|(k, _)| *k).collect();
+            return Err(bad(
+                &self.run,
+                format!("has no frame {}", n.unwrap_or(0)),
+                format!("use one of {have:?}"),
+            ));
+        };
+        let mut m = read_obj(&path)?;
+        m.number = k;
+        Ok(m)
+    }
+
+    /// Frame 0, the strain's rest shape, read once.
+    fn rest(&mut self, particles: usize) -> Result<&[Vec3], Error> {
+        if self.rest.is_none() {
+            let first = frames(&self.run)?.into_iter().next();
+            let rest = match first {
+                Some((0, path)) => read_obj(&path)?.positions,
+                _ => Vec::new(),
+            };
+            self.rest = Some(rest);
+        }
+        let rest = self.rest.as_deref().unwrap_or_default();
+        if rest.len() != particles {
+            return Err(bad(
+                &self.run,
+                "strain colours need frame 0 (frame_0000.obj) as the rest shape",
+                "rerun the scene so that frame 0 is written (it always is with OBJ frames on)",
+            ));
+        }
+        Ok(rest)
+    }
+
+    /// The cloth coloured by `look.mode`, and the legend that explains the colours.
+    fn cloth(
+        &mut self,
+        f: &FrameMesh,
+        look: &Look,
+    ) -> Result<(DrawMesh, Option<super::colors::Legend>), Error> {
+        let mesh = |colors: Vec<Vec3>| DrawMesh {
+            positions: f.positions.clone(),
+            colors,
+            triangles: f.triangles.clone(),
+            uv: f.uv.clone(),
+            checker: look.checker,
+        };
+        match look.mode {
+            ColorMode::Fabric => {
+                // Panels do not share particles, so a vertex takes any of its triangles' panel.
+                let mut colors = vec![FABRIC; f.positions.len()];
+                for (t, &g) in f.triangles.iter().zip(&f.groups) {
+                    for &i in t {
+                        colors[i as usize] = panel_color(g, &look.colors);
+                    }
+                }
+                Ok((mesh(colors), None))
+            }
+            ColorMode::Strain => {
+                let max = look.strain_max;
+                let rest = self.rest(f.positions.len())?;
+                let strain = triangle_strain(rest, &f.positions, &f.triangles);
+                // Flat colours per triangle: every triangle gets its own three vertices.
+                let mut m = DrawMesh {
+                    checker: look.checker,
+                    ..Default::default()
+                };
+                for (t, s) in f.triangles.iter().zip(strain) {
+                    let base = m.positions.len() as u32;
+                    for &i in t {
+                        m.positions.push(f.positions[i as usize]);
+                        m.colors.push(strain_ramp(s / max));
+                        if let Some(uv) = f.uv.get(i as usize) {
+                            m.uv.push(*uv);
+                        }
+                    }
+                    m.triangles.push([base, base + 1, base + 2]);
+                }
+                Ok((m, Some(strain_legend(max))))
+            }
+            ColorMode::Penetration => {
+                let Some((body, settings)) = &self.body else {
+                    return Err(bad(
+                        &self.run,
+                        "penetration colours need a body, and the run's scene has no [body]",
+                        "use --mode fabric or --mode strain",
+                    ));
+                };
+                if self.exact.is_none() {
+                    let exact = ExactBody::new(&body.mesh).map_err(|e| {
+                        Error::Gpu(format!("cannot measure distances to the body: {e}"))
+                    })?;
+                    self.exact = Some(exact);
+                }
+                let exact = self.exact.as_ref().expect("built above");
+                let pose = settings.motion.at(f.number as f32 / self.fps);
+                let inverse = pose.rotation.inverse();
+                let scale = PenetrationScale::for_thickness(settings.thickness);
+                let colors = (f.positions.iter())
+                    .map(|p| scale.color(exact.query(inverse * (*p - pose.translation)).0))
+                    .collect();
+                Ok((mesh(colors), Some(penetration_legend(scale))))
+            }
+        }
+    }
+
+    /// The seam segments of the scene's pattern (none for other cloth), built once.
+    fn seam_segments(&mut self) -> Result<&[[u32; 2]], Error> {
+        if self.seams.is_none() {
+            let garment = match self.scene {
+                Some(s) => s.build_garment()?,
+                None => None,
+            };
+            self.seams = Some(garment.as_ref().map(seam_segments).unwrap_or_default());
+        }
+        Ok(self.seams.as_deref().unwrap_or_default())
+    }
+
+    /// The box a preset camera frames: the cloth, and the body where it lies near the cloth's
+    /// box (a T-shirt's head, a skirt's hips, not the whole mannequin).
+    pub fn framing_box(&self, frame: u32, cloth: &[Vec3]) -> (Vec3, Vec3) {
+        let (lo, hi) = bounds(cloth);
+        let Some((body, settings)) = &self.body else {
+            return (lo, hi);
+        };
+        // Up by 40% of the cloth's height (a T-shirt's head), elsewhere by 10% of its size.
+        let side = Vec3::splat(0.1 * (hi - lo).max_element());
+        let (near_lo, near_hi) = (lo - side, hi + side + Vec3::Y * 0.4 * (hi.y - lo.y));
+        let pose = settings.motion.at(frame as f32 / self.fps);
+        let near: Vec<Vec3> = (body.mesh.positions.iter())
+            .map(|p| pose.rotation * *p + pose.translation)
+            .filter(|p| p.cmpge(near_lo).all() && p.cmple(near_hi).all())
+            .collect();
+        if near.is_empty() {
+            return (lo, hi);
+        }
+        let (b_lo, b_hi) = bounds(&near);
+        (lo.min(b_lo), hi.max(b_hi))
+    }
+
+    /// Renders frame `n` (`None`: the last) as RGBA8 sRGB pixels of `look.size`. A preset
+    /// camera frames `framing` when given (a fixed box for an animation), else the cloth.
+    pub fn image(
+        &mut self,
+        n: Option<u32>,
+        look: &Look,
+        framing: Option<(Vec3, Vec3)>,
+    ) -> Result<Vec<u8>, Error> {
+        let f = self.load(n)?;
+        let (frame, positions) = (f.number, &f.positions);
+        let (cloth, legend) = self.cloth(&f, look)?;
+        let (w, h) = look.size;
+        let (lo, hi) = framing.unwrap_or_else(|| self.framing_box(frame, positions));
+        let camera = look.camera.camera(lo, hi, w as f32 / h as f32);
+        let mut meshes = vec![cloth];
+        if look.seams {
+            let segments = self.seam_segments()?.to_vec();
+            let width_px = (h as f32 / 400.0).max(2.0);
+            meshes.push(seam_ribbons(positions, &segments, &camera, h, width_px));
+        }
+        if let Some((body, settings)) = &self.body {
+            let pose = settings.motion.at(frame as f32 / self.fps);
+            meshes.push(DrawMesh {
+                positions: (body.mesh.positions.iter())
+                    .map(|p| pose.rotation * *p + pose.translation)
+                    .collect(),
+                colors: vec![BODY; body.mesh.positions.len()],
+                triangles: body.mesh.triangles.clone(),
+                ..Default::default()
+            });
+        }
+        let mut pixels = render(&self.ctx, &meshes, &camera, w, h)?;
+        if let Some(legend) = legend.filter(|_| look.legend) {
+            draw_legend(&mut pixels, w, h, &legend);
+        }
+        Ok(pixels)
+    }
+}
