@@ -450,3 +450,49 @@ fn the_shipped_dataset_sweeps_garments_fabrics_and_spacings() {
     let fabrics: std::collections::BTreeSet<_> = combos.iter().map(|c| c.1.as_str()).collect();
     assert_eq!(fabrics.len(), drapekit::scene::PRESETS.len());
 }
+
+#[test]
+fn a_transient_failure_is_retried_then_left_unfinished_for_the_next_run() {
+    let dir = workdir("transient");
+    write_scene(&dir, "sheet.toml", 2);
+    let manifest = write_manifest(&dir, 1);
+    let out = dir.join("out");
+    // No adapter has this name: the GPU backend cannot start, a GPU error.
+    let args = [
+        manifest.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--backend",
+        "gpu",
+        "--adapter",
+        "no-such-adapter-anywhere",
+        "--retries",
+        "2",
+    ];
+    for _ in 0..2 {
+        let r = batch(&args);
+        let log = text(&r);
+        assert_eq!(r.status.code(), Some(4), "{log}");
+        // Never skipped: without a marker the item is redone.
+        assert_eq!(skips(&log), 0, "{log}");
+        assert_eq!(log.matches("retrying").count(), 2, "{log}");
+    }
+    let item = out.join("item-00");
+    assert!(!item.join("done").exists());
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(item.join("item.json")).unwrap()).unwrap();
+    assert_eq!(meta["attempts"], 3);
+    let error: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(item.join("error.json")).unwrap()).unwrap();
+    assert_eq!(error["kind"], "gpu");
+    let r = batch(&["report", out.to_str().unwrap()]);
+    assert!(r.status.success(), "{}", text(&r));
+    let csv = std::fs::read_to_string(out.join("batch.csv")).unwrap();
+    assert!(
+        csv.lines()
+            .nth(1)
+            .unwrap()
+            .starts_with("item-00,unfinished,gpu,"),
+        "{csv}"
+    );
+}
