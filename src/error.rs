@@ -32,16 +32,20 @@ pub enum Error {
         /// The operating system's error.
         source: std::io::Error,
     },
+    /// Some items of a batch failed; each recorded its error in its own folder (exit 4).
+    #[error("{0}")]
+    ItemsFailed(String),
 }
 
 impl Error {
-    /// Process exit code for this error: 2 for bad input, 3 for an unstable run, 130 for an
-    /// interrupted one (the shell's code for SIGINT), 1 otherwise.
+    /// Process exit code for this error: 2 for bad input, 3 for an unstable run, 4 for a batch
+    /// with failed items, 130 for an interrupted run (the shell's code for SIGINT), 1 otherwise.
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Input(_) => 2,
             Error::Unstable(_) => 3,
             Error::Interrupted { .. } => 130,
+            Error::ItemsFailed(_) => 4,
             Error::Gpu(_) | Error::Io { .. } => 1,
         }
     }

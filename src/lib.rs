@@ -7,10 +7,11 @@
 //! Modules form layers that import only downward (README.md, "Architecture"): ground
 //! (`error`, `check`, `atomic_file`) → geometry (`mesh`, `pattern`, `body`) → `scene` →
 //! `model` → `plan` and `solver` → backends (`cpu`, `gpu`) and `metrics` → `sim` → outputs
-//! (`run`, `output`, `export`, `bench`, `plot`) → the CLI.
+//! (`run`, `output`, `export`, `bench`, `plot`, `batch`) → the CLI.
 #![warn(missing_docs)]
 
 pub mod atomic_file;
+pub mod batch;
 pub mod bench;
 pub mod bench_integrators;
 pub mod body;

@@ -127,6 +127,8 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Run a manifest of scenes (JSON Lines), or one shard of it; `batch report DIR` tabulates.
+    Batch(BatchCli),
     /// Time whole substeps on both backends and write CSV and Markdown tables.
     #[command(after_help = "Examples:\n  \
         drapekit bench --sizes 64,128 --repeats 3 --out out/bench\n  \
@@ -154,6 +156,52 @@ enum Command {
         /// With --scene: output frames per point (default: the scene's).
         #[arg(long)]
         frames: Option<u32>,
+    },
+}
+
+/// `drapekit batch MANIFEST --out DIR [...]`, or `drapekit batch report DIR`.
+#[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+struct BatchCli {
+    #[command(subcommand)]
+    report: Option<BatchCommand>,
+    /// The manifest: one JSON object a line, {"id": "…", "scene": "path.toml", "overrides": {…}}.
+    #[arg(required = true)]
+    manifest: Option<PathBuf>,
+    /// The batch's output folder; each item writes DIR/<id>/ (the scenes' [output] dir is ignored).
+    #[arg(long, required = true)]
+    out: Option<PathBuf>,
+    /// Run shard i of n (items k with k mod n = i). Default: from SLURM_ARRAY_TASK_ID/COUNT or
+    /// JOB_COMPLETION_INDEX, else the whole manifest.
+    #[arg(long)]
+    shard: Option<drapekit::batch::Shard>,
+    /// The shard count: with JOB_COMPLETION_INDEX (the Kubernetes Job's completions), or with
+    /// a Slurm array whose task ids are shard indices (resubmitting some shards).
+    #[arg(long)]
+    shards: Option<u32>,
+    /// Items at once (default: one per core with --backend cpu, else 1: GPU items run in turn).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Extra attempts for an item after a transient failure (GPU error, device lost, I/O).
+    #[arg(long, default_value_t = 0)]
+    retries: u32,
+    /// auto: the GPU if an adapter exists, else the CPU; cpu; gpu.
+    #[arg(long, default_value = "auto")]
+    backend: BackendChoice,
+    /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
+    #[arg(long, default_value = "auto")]
+    adapter: AdapterChoice,
+    /// Override every scene's number of output frames.
+    #[arg(long)]
+    frames: Option<u32>,
+}
+
+#[derive(Subcommand)]
+enum BatchCommand {
+    /// Merge every item's summary into DIR/batch.csv and DIR/batch.md.
+    Report {
+        /// The batch's output folder.
+        dir: PathBuf,
     },
 }
 
@@ -342,6 +390,32 @@ fn execute(command: Command) -> Result<(), Error> {
             println!("wrote {}", out.display());
             Ok(())
         }
+        Command::Batch(BatchCli {
+            report: Some(BatchCommand::Report { dir }),
+            ..
+        }) => {
+            let report = drapekit::batch::report::write(&dir)?;
+            println!(
+                "{} items; wrote {} and {}",
+                report.rows.len(),
+                dir.join("batch.csv").display(),
+                dir.join("batch.md").display()
+            );
+            Ok(())
+        }
+        Command::Batch(b) => drapekit::batch::run_cli(&drapekit::batch::BatchOptions {
+            manifest: b.manifest.expect("clap requires it"),
+            out: b.out.expect("clap requires it"),
+            shard: b.shard,
+            shards: b.shards,
+            jobs: b.jobs,
+            item: drapekit::batch::ItemOptions {
+                backend: b.backend,
+                adapter: b.adapter,
+                frames: b.frames,
+                retries: b.retries,
+            },
+        }),
         Command::Bench {
             scene: Some(scene),
             frames,

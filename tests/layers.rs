@@ -29,6 +29,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("bench_integrators", 8),
     ("plot", 8),
     ("preview", 8),
+    ("batch", 8),
 ];
 
 fn rust_files(dir: &Path, out: &mut Vec<std::path::PathBuf>) {

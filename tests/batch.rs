@@ -1,0 +1,498 @@
+//! `drapekit batch` end to end: the manifest is validated whole, shards cover every item once,
+//! a killed shard resumes to the same results as one process, markers decide what reruns, and
+//! a failing item fails alone. Tiny grids on the CPU backend keep it to seconds.
+
+use drapekit::batch::{shard, Manifest, Shard};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+fn drapekit() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_drapekit"));
+    c.env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .env_remove("JOB_COMPLETION_INDEX");
+    c
+}
+
+fn batch(args: &[&str]) -> Output {
+    drapekit().arg("batch").args(args).output().unwrap()
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// A fresh folder for one test.
+fn workdir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("drapekit-batch-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("scenes")).unwrap();
+    dir
+}
+
+/// A small hanging sheet; `frames` sets how long an item takes.
+fn write_scene(dir: &Path, name: &str, frames: u32) -> PathBuf {
+    let path = dir.join("scenes").join(name);
+    std::fs::write(
+        &path,
+        format!(
+            "[cloth.grid]\nwidth_m = 0.5\nheight_m = 0.5\ncolumns = 10\nrows = 10\n\
+             center_m = [0.0, 1.0, 0.0]\n\n\
+             [fabric]\ndensity_kg_m2 = 0.15\nstretch_stiffness_n_m = 300.0\n\
+             bending_stiffness_n_m = 2e-5\ndamping_ratio = 0.1\n\n\
+             [[pins]]\ncorners = [\"top-left\", \"top-right\"]\n\n\
+             [solver]\nfps = 24\nframes = {frames}\n\n\
+             [output]\nobj = true\nevery = 2\n"
+        ),
+    )
+    .unwrap();
+    path
+}
+
+/// `n` items over the scene, varying the grid and the damping.
+fn write_manifest(dir: &Path, n: usize) -> PathBuf {
+    let lines: Vec<String> = (0..n)
+        .map(|k| {
+            format!(
+                r#"{{"id": "item-{k:02}", "scene": "scenes/sheet.toml", "overrides": {{"cloth": {{"grid": {{"columns": {}}}}}, "fabric": {{"damping_ratio": {}}}}}}}"#,
+                8 + k % 4,
+                0.05 + 0.01 * k as f64
+            )
+        })
+        .collect();
+    let path = dir.join("manifest.jsonl");
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+    path
+}
+
+/// Every summary under `out`, by item id, less the fields that time the run.
+fn summaries(out: &Path) -> BTreeMap<String, serde_json::Value> {
+    let mut all = BTreeMap::new();
+    for entry in std::fs::read_dir(out).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_str().unwrap().to_string();
+        if name.starts_with('.') || !path.is_dir() {
+            continue;
+        }
+        let mut s: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(path.join("summary.json")).unwrap()).unwrap();
+        for timed in ["wall_seconds", "particle_substeps_per_second"] {
+            s.as_object_mut().unwrap().remove(timed);
+        }
+        all.insert(name, s);
+    }
+    all
+}
+
+/// Every visible item folder is complete: it has its marker, and everything its summary lists.
+fn assert_no_half_written_item(out: &Path) {
+    for entry in std::fs::read_dir(out).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_str().unwrap();
+        if name.starts_with('.') || !path.is_dir() {
+            continue;
+        }
+        assert!(path.join("done").is_file(), "{name} has no done marker");
+        let s: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(path.join("summary.json")).unwrap()).unwrap();
+        for f in s["outputs"].as_array().unwrap() {
+            assert!(
+                path.join(f.as_str().unwrap()).is_file(),
+                "{name}/{f} missing"
+            );
+        }
+    }
+}
+
+/// Items a batch's log says it skipped.
+fn skips(log: &str) -> usize {
+    log.matches(", skipped").count()
+}
+
+#[test]
+fn a_bad_manifest_reports_every_bad_line_and_runs_nothing() {
+    let dir = workdir("bad");
+    write_scene(&dir, "sheet.toml", 2);
+    let lines = [
+        r#"{"id": "good", "scene": "scenes/sheet.toml"}"#,
+        r#"{"id": "broken", "scene": "scenes/sheet.toml""#,
+        r#"{"id": "typo", "scene": "scenes/sheet.toml", "overides": {}}"#,
+        r#"{"id": "../escape", "scene": "scenes/sheet.toml"}"#,
+        r#"{"id": "good", "scene": "scenes/sheet.toml"}"#,
+        r#"{"id": "missing", "scene": "scenes/nowhere.toml"}"#,
+        r#"{"id": "velvet", "scene": "scenes/sheet.toml", "overrides": {"fabric": {"preset": "velvet"}}}"#,
+        "",
+        r#"{"id": "zero-rows", "scene": "scenes/sheet.toml", "overrides": {"cloth": {"grid": {"rows": 1}}}}"#,
+        r#"{"id": "fine", "scene": "scenes/sheet.toml", "overrides": {"solver": {"frames": 1}}}"#,
+    ];
+    let manifest = dir.join("m.jsonl");
+    std::fs::write(&manifest, lines.join("\n")).unwrap();
+    let out = dir.join("out");
+    let r = batch(&[
+        manifest.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--backend",
+        "cpu",
+    ]);
+    let msg = text(&r);
+    assert_eq!(r.status.code(), Some(2), "{msg}");
+    assert!(msg.contains("7 of 9 items are bad"), "{msg}");
+    for (line, says) in [
+        (2, "not JSON"),
+        (3, "unknown key \"overides\""),
+        (4, "not safe in a folder name"),
+        (5, "already used on line 1"),
+        (6, "cannot read the scene"),
+        (7, "unknown fabric preset \"velvet\""),
+        (9, "cloth.grid"),
+    ] {
+        let at = msg
+            .lines()
+            .find(|l| l.contains(&format!("line {line}: ")))
+            .unwrap_or_else(|| panic!("line {line} not reported:\n{msg}"));
+        let block = &msg[msg.find(at).unwrap()..];
+        assert!(
+            block.contains(says),
+            "line {line} should say {says:?}:\n{msg}"
+        );
+    }
+    for good in ["line 1:", "line 10:"] {
+        assert!(!msg.contains(good), "a good line was reported: {msg}");
+    }
+    // Nothing was simulated, nothing written.
+    assert!(!out.exists());
+}
+
+#[test]
+fn shards_are_a_pure_round_robin_over_items() {
+    let dir = workdir("shards");
+    write_scene(&dir, "sheet.toml", 2);
+    // Blank lines do not shift the items' shards.
+    let m = write_manifest(&dir, 7);
+    let text = std::fs::read_to_string(&m).unwrap().replace('\n', "\n\n");
+    let manifest = Manifest::parse(&text, &m).unwrap();
+    let mut seen = vec![0; manifest.items.len()];
+    for i in 0..3 {
+        let s = Shard::new(i, 3).unwrap();
+        for item in manifest.items.iter().filter(|it| s.owns(it.index)) {
+            assert_eq!(item.index % 3, i as usize);
+            seen[item.index] += 1;
+        }
+    }
+    assert_eq!(seen, vec![1; 7]);
+    let env = |name: &str| match name {
+        "SLURM_ARRAY_TASK_ID" => Some("1".to_string()),
+        "SLURM_ARRAY_TASK_COUNT" => Some("3".to_string()),
+        _ => None,
+    };
+    assert_eq!(
+        shard::resolve(None, None, &env).unwrap().0,
+        Shard::new(1, 3).unwrap()
+    );
+}
+
+#[test]
+fn three_shards_with_one_killed_midway_equal_one_process() {
+    let dir = workdir("resume");
+    write_scene(&dir, "sheet.toml", 72);
+    let manifest = write_manifest(&dir, 9);
+    let m = manifest.to_str().unwrap();
+    let single = dir.join("single");
+    let r = batch(&[m, "--out", single.to_str().unwrap(), "--backend", "cpu"]);
+    assert!(r.status.success(), "{}", text(&r));
+
+    let sharded = dir.join("sharded");
+    let s = sharded.to_str().unwrap();
+    let spawn = |shard: &str| {
+        drapekit()
+            .args(["batch", m, "--out", s, "--backend", "cpu", "--jobs", "1"])
+            .args(["--shard", shard])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let mut victim = spawn("1/3");
+    let others = [spawn("0/3"), spawn("2/3")];
+    // Kill shard 1 once its first item is published and before its last.
+    let mine = ["item-01", "item-04", "item-07"];
+    let started = std::time::Instant::now();
+    while !mine.iter().any(|id| sharded.join(id).join("done").exists()) {
+        assert!(
+            started.elapsed().as_secs() < 60,
+            "shard 1 never finished an item"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    victim.kill().unwrap();
+    victim.wait().unwrap();
+    for o in others {
+        let out = o.wait_with_output().unwrap();
+        assert!(out.status.success(), "{}", text(&out));
+    }
+    let finished = mine.iter().filter(|id| sharded.join(id).exists()).count();
+    assert!(
+        finished < 3,
+        "shard 1 finished before the kill; make its items slower"
+    );
+    assert_no_half_written_item(&sharded);
+
+    let r = batch(&[m, "--out", s, "--backend", "cpu", "--shard", "1/3"]);
+    let out = text(&r);
+    assert!(r.status.success(), "{out}");
+    assert_eq!(
+        out.matches("done before, skipped").count(),
+        finished,
+        "{out}"
+    );
+    assert_no_half_written_item(&sharded);
+    // No leftovers of the killed run.
+    let hidden: Vec<_> = std::fs::read_dir(&sharded)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
+        .collect();
+    assert!(hidden.is_empty(), "{hidden:?}");
+    let (a, b) = (summaries(&single), summaries(&sharded));
+    assert_eq!(a.len(), 9);
+    assert_eq!(
+        a, b,
+        "the sharded, killed and resumed batch differs from one process"
+    );
+
+    // The report holds every item exactly once.
+    let r = batch(&["report", s]);
+    assert!(r.status.success(), "{}", text(&r));
+    let csv = std::fs::read_to_string(sharded.join("batch.csv")).unwrap();
+    let ids: Vec<&str> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap())
+        .collect();
+    let want: Vec<String> = (0..9).map(|k| format!("item-{k:02}")).collect();
+    assert_eq!(ids, want);
+    assert!(csv
+        .lines()
+        .skip(1)
+        .all(|l| l.split(',').nth(1) == Some("ok")));
+}
+
+#[test]
+fn markers_decide_what_a_rerun_skips_and_redoes() {
+    let dir = workdir("markers");
+    let scene = write_scene(&dir, "sheet.toml", 2);
+    let manifest = write_manifest(&dir, 3);
+    let out = dir.join("out");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            manifest.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--backend",
+            "cpu",
+        ];
+        args.extend_from_slice(extra);
+        let r = batch(&args);
+        assert!(r.status.success(), "{}", text(&r));
+        text(&r)
+    };
+    let skipped = |log: &str, id: &str| {
+        log.lines()
+            .any(|l| l.contains(&format!("{id}: done before, skipped")))
+    };
+    run(&[]);
+    let log = run(&[]);
+    assert!(
+        ["item-00", "item-01", "item-02"]
+            .iter()
+            .all(|id| skipped(&log, id)),
+        "{log}"
+    );
+
+    // A changed line redoes that item only.
+    let text_now = std::fs::read_to_string(&manifest).unwrap();
+    std::fs::write(
+        &manifest,
+        text_now.replace("\"columns\": 9", "\"columns\": 12"),
+    )
+    .unwrap();
+    let log = run(&[]);
+    assert!(skipped(&log, "item-00") && !skipped(&log, "item-01") && skipped(&log, "item-02"));
+    let s: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("item-01/summary.json")).unwrap()).unwrap();
+    assert_eq!(s["particles"], 12 * 10);
+
+    // An item whose marker is gone (never finished) is redone.
+    std::fs::remove_file(out.join("item-02/done")).unwrap();
+    let log = run(&[]);
+    assert!(
+        skipped(&log, "item-00") && !skipped(&log, "item-02"),
+        "{log}"
+    );
+
+    // A changed scene file, or a changed option that alters results, redoes everything.
+    let src = std::fs::read_to_string(&scene).unwrap();
+    std::fs::write(
+        &scene,
+        src.replace("damping_ratio = 0.1", "damping_ratio = 0.2"),
+    )
+    .unwrap();
+    let log = run(&[]);
+    assert_eq!(skips(&log), 0, "{log}");
+    let log = run(&["--frames", "3"]);
+    assert_eq!(skips(&log), 0, "{log}");
+    let log = run(&["--frames", "3"]);
+    assert_eq!(skips(&log), 3, "{log}");
+}
+
+#[test]
+fn a_failing_item_fails_alone_and_is_reported_by_cause() {
+    let dir = workdir("failures");
+    write_scene(&dir, "sheet.toml", 4);
+    let lines = [
+        r#"{"id": "ok-a", "scene": "scenes/sheet.toml"}"#,
+        // ~200× past the stable step: it explodes (exit 3 under `drapekit run`).
+        r#"{"id": "explodes", "scene": "scenes/sheet.toml", "overrides": {"solver": {"substeps": 1}}}"#,
+        // Valid to read, refused when the model is sized: bad input found late.
+        r#"{"id": "too-big", "scene": "scenes/sheet.toml", "overrides": {"solver": {"max_memory_mb": 0.01}}}"#,
+        // The scene asks for a folder outside the batch: ignored, the item folder is used.
+        r#"{"id": "ok-b", "scene": "scenes/sheet.toml", "overrides": {"output": {"dir": "elsewhere"}}}"#,
+    ];
+    let manifest = dir.join("m.jsonl");
+    std::fs::write(&manifest, lines.join("\n")).unwrap();
+    let out = dir.join("out");
+    let args = [
+        manifest.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--jobs",
+        "2",
+    ];
+    let r = drapekit()
+        .current_dir(&dir)
+        .arg("batch")
+        .args(args)
+        .output()
+        .unwrap();
+    let log = text(&r);
+    assert_eq!(r.status.code(), Some(4), "{log}");
+    assert!(
+        log.contains("2 of 4 items failed: explodes, too-big"),
+        "{log}"
+    );
+    assert!(!dir.join("elsewhere").exists());
+    for ok in ["ok-a", "ok-b"] {
+        assert!(out.join(ok).join("summary.json").is_file());
+        assert!(!out.join(ok).join("error.json").exists());
+    }
+    let error = |id: &str| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(out.join(id).join("error.json")).unwrap()).unwrap()
+    };
+    assert_eq!(error("explodes")["kind"], "unstable");
+    assert_eq!(error("explodes")["exit_code"], 3);
+    assert_eq!(error("too-big")["kind"], "bad_input");
+    assert!(out.join("explodes/summary.json").is_file());
+    // A failure a rerun would repeat is not rerun; the exit code still says it failed.
+    let r = drapekit()
+        .current_dir(&dir)
+        .arg("batch")
+        .args(args)
+        .output()
+        .unwrap();
+    let log = text(&r);
+    assert_eq!(r.status.code(), Some(4), "{log}");
+    assert_eq!(skips(&log), 4, "{log}");
+
+    let r = batch(&["report", out.to_str().unwrap()]);
+    assert!(r.status.success(), "{}", text(&r));
+    let md = std::fs::read_to_string(out.join("batch.md")).unwrap();
+    assert!(md.contains("| 4 | 2 | 2 | 0 |"), "{md}");
+    assert!(md.contains("| unstable | 1 | explodes |"), "{md}");
+    assert!(md.contains("| bad_input | 1 | too-big |"), "{md}");
+    let csv = std::fs::read_to_string(out.join("batch.csv")).unwrap();
+    assert_eq!(
+        csv.lines().next().unwrap(),
+        drapekit::batch::report::COLUMNS.join(",")
+    );
+    assert_eq!(csv.lines().count(), 5);
+}
+
+#[test]
+fn the_shipped_dataset_sweeps_garments_fabrics_and_spacings() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/datasets/skirts_small.jsonl");
+    let manifest = Manifest::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert!(manifest.items.len() >= 24);
+    let mut combos = std::collections::BTreeSet::new();
+    for item in &manifest.items {
+        let garment = item.files[0]
+            .1
+            .file_stem()
+            .unwrap()
+            .to_str()
+            .unwrap()
+            .to_string();
+        combos.insert((
+            garment,
+            item.fabric.clone(),
+            item.particle_distance_m.map(|d| (d * 1e3) as u32),
+        ));
+    }
+    // Every combination once: 2 garments × 7 presets × 2 spacings.
+    assert_eq!(combos.len(), manifest.items.len());
+    let fabrics: std::collections::BTreeSet<_> = combos.iter().map(|c| c.1.as_str()).collect();
+    assert_eq!(fabrics.len(), drapekit::scene::PRESETS.len());
+}
+
+#[test]
+fn a_transient_failure_is_retried_then_left_unfinished_for_the_next_run() {
+    let dir = workdir("transient");
+    write_scene(&dir, "sheet.toml", 2);
+    let manifest = write_manifest(&dir, 1);
+    let out = dir.join("out");
+    // No adapter has this name: the GPU backend cannot start, a GPU error.
+    let args = [
+        manifest.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--backend",
+        "gpu",
+        "--adapter",
+        "no-such-adapter-anywhere",
+        "--retries",
+        "2",
+    ];
+    for _ in 0..2 {
+        let r = batch(&args);
+        let log = text(&r);
+        assert_eq!(r.status.code(), Some(4), "{log}");
+        // Never skipped: without a marker the item is redone.
+        assert_eq!(skips(&log), 0, "{log}");
+        assert_eq!(log.matches("retrying").count(), 2, "{log}");
+    }
+    let item = out.join("item-00");
+    assert!(!item.join("done").exists());
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(item.join("item.json")).unwrap()).unwrap();
+    assert_eq!(meta["attempts"], 3);
+    let error: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(item.join("error.json")).unwrap()).unwrap();
+    assert_eq!(error["kind"], "gpu");
+    let r = batch(&["report", out.to_str().unwrap()]);
+    assert!(r.status.success(), "{}", text(&r));
+    let csv = std::fs::read_to_string(out.join("batch.csv")).unwrap();
+    assert!(
+        csv.lines()
+            .nth(1)
+            .unwrap()
+            .starts_with("item-00,unfinished,gpu,"),
+        "{csv}"
+    );
+}
