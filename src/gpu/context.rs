@@ -87,6 +87,9 @@ pub struct GpuContext {
     pub queue: wgpu::Queue,
     /// What the adapter says about itself.
     pub info: wgpu::AdapterInfo,
+    /// A device loss and the first uncaptured GPU error, recorded by wgpu's callbacks (which
+    /// would otherwise panic) and turned into `Error::Gpu` by `check`.
+    failure: std::sync::Arc<std::sync::Mutex<[Option<String>; 2]>>,
 }
 
 impl GpuContext {
@@ -146,11 +149,44 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|e| Error::Gpu(format!("cannot open a device on {:?}: {e}", info.name)))?;
+        let failure = std::sync::Arc::new(std::sync::Mutex::new([None, None]));
+        let lost = failure.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            if let Ok(mut f) = lost.lock() {
+                let detail = if message.is_empty() {
+                    String::new()
+                } else {
+                    format!(": {message}")
+                };
+                f[0].get_or_insert(format!("the GPU device was lost ({reason:?}){detail}"));
+            }
+        });
+        let errors = failure.clone();
+        device.on_uncaptured_error(std::sync::Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut f) = errors.lock() {
+                f[1].get_or_insert(format!("the GPU reported an error: {e}"));
+            }
+        }));
         Ok(GpuContext {
             device,
             queue,
             info,
+            failure,
         })
+    }
+
+    /// `Err` once the device was lost or reported an error: what happened, and that the frames
+    /// written and the last checkpoint survive.
+    pub fn check(&self) -> Result<(), Error> {
+        // A loss explains the errors that follow it, so it is named first.
+        let first = (self.failure.lock().ok()).and_then(|f| f[0].clone().or(f[1].clone()));
+        match first {
+            None => Ok(()),
+            Some(what) => Err(Error::Gpu(format!(
+                "{what}. The frames written so far and the last checkpoint survive: continue \
+                 with drapekit resume OUT (runs with --checkpoint-every N), or use --backend cpu"
+            ))),
+        }
     }
 
     /// The adapter as reported in summaries and benchmarks.

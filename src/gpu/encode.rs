@@ -10,6 +10,7 @@ impl GpuSolver {
     /// Runs the given stages (each must be in the plan) once per entry of `steps`, in one
     /// submission. `advance` runs the whole plan; parity tests run single stages.
     pub fn run_passes(&mut self, passes: &[Pass], steps: &[SubstepParams]) -> Result<(), Error> {
+        self.ctx.check()?;
         let capacity = self.substeps.as_ref().map_or(usize::MAX, |s| s.capacity);
         for batch in steps.chunks(capacity.min(steps.len().max(1))) {
             if let Some(sb) = &self.substeps {

@@ -66,6 +66,7 @@ impl GpuSolver {
         slice: wgpu::BufferSlice,
         read: impl FnOnce(&[u8]) -> T,
     ) -> Result<T, Error> {
+        self.ctx.check()?;
         let (tx, rx) = std::sync::mpsc::channel();
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
@@ -74,6 +75,8 @@ impl GpuSolver {
             .device
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| Error::Gpu(format!("waiting for the GPU failed: {e}")))?;
+        // A lost device fails the mapping below; its own message says more.
+        self.ctx.check()?;
         rx.recv()
             .map_err(|e| Error::Gpu(format!("readback was dropped: {e}")))?
             .map_err(|e| Error::Gpu(format!("mapping the staging buffer failed: {e}")))?;
