@@ -84,3 +84,35 @@ fn self_collision_wind_and_exact_contact_are_thread_count_independent() {
     // Exact point-to-mesh queries and edge contacts against the body.
     same_on_any_thread_count("drape_bar", 6, |_| {});
 }
+
+#[test]
+fn backend_auto_prefers_the_cpu_path_to_a_software_adapter() {
+    let out = std::env::temp_dir().join(format!("drapekit-threads-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let r = std::process::Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .args(["run", "--frames", "2", "--quiet", "--threads", "2", "--out"])
+        .arg(&out)
+        .arg(common::fixture("scenes/hanging_cloth.toml"))
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .env_remove("WGPU_ADAPTER_NAME")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    // What `--adapter auto` finds decides what `--backend auto` must have run.
+    let hardware = drapekit::gpu::adapters()
+        .auto
+        .is_some_and(|a| a.device_type != "cpu");
+    if hardware {
+        assert_eq!(summary["backend"], "gpu", "{summary}");
+        assert!(summary["cpu_threads"].is_null());
+    } else {
+        assert_eq!(summary["backend"], "cpu", "{summary}");
+        assert_eq!(summary["cpu_threads"], 2);
+        assert!(stdout.contains("[CPU, 2 threads]"), "{stdout}");
+        let note = summary["backend_note"].as_str().unwrap();
+        assert!(note.contains("CPU path"), "{note}");
+    }
+}
