@@ -115,6 +115,16 @@ pub fn cpu_description() -> String {
     format!("{model}, {cores} cores")
 }
 
+/// The CPU and the rayon threads the CPU twin runs on (`--threads`).
+pub fn cpu_threads_description() -> String {
+    let n = rayon::current_num_threads();
+    format!(
+        "{}, {n} thread{}",
+        cpu_description(),
+        if n == 1 { "" } else { "s" }
+    )
+}
+
 /// Times whole substeps for each size on the CPU twin and the GPU path.
 pub fn run_cli(
     sizes: &[u32],
@@ -130,7 +140,7 @@ pub fn run_cli(
             None
         }
     };
-    let cpu_name = format!("single-threaded CPU twin ({})", cpu_description());
+    let cpu_name = format!("CPU twin ({})", cpu_threads_description());
     let mut rows = Vec::new();
     for &n in sizes {
         let (model, params, plan) = bench_model(n.max(2));

@@ -3,7 +3,7 @@
 //! simulated second, particle-substeps/s and the largest strain, as CSV and Markdown.
 
 use crate::atomic_file::write_atomic;
-use crate::bench::cpu_description;
+use crate::bench::cpu_threads_description;
 use crate::cpu::CpuSolver;
 use crate::error::Error;
 use crate::gpu::{AdapterChoice, GpuContext, GpuSolver};
@@ -89,7 +89,7 @@ pub fn run_cli(
         };
         let mut backends: Vec<(&'static str, String, Box<dyn Solver>)> = vec![(
             "cpu",
-            format!("single-threaded CPU twin ({})", cpu_description()),
+            format!("CPU twin ({})", cpu_threads_description()),
             Box::new(CpuSolver::new(&prep.model, prep.params, &prep.plan)),
         )];
         if let Some(ctx) = &ctx {

@@ -17,6 +17,9 @@ use std::process::ExitCode;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Threads of the CPU backend (default: all cores). Results do not depend on it.
+    #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    threads: Option<u32>,
 }
 
 #[derive(Subcommand)]
@@ -31,7 +34,8 @@ enum Command {
         /// Output folder (default: [output] dir, else out/<scene name>).
         #[arg(long)]
         out: Option<PathBuf>,
-        /// auto: the GPU if an adapter exists, else the CPU; cpu; gpu.
+        /// auto: a hardware GPU if there is one, else the CPU (also instead of a software
+        /// adapter such as llvmpipe); cpu; gpu.
         #[arg(long, default_value = "auto")]
         backend: BackendChoice,
         /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
@@ -185,7 +189,8 @@ struct BatchCli {
     /// Extra attempts for an item after a transient failure (GPU error, device lost, I/O).
     #[arg(long, default_value_t = 0)]
     retries: u32,
-    /// auto: the GPU if an adapter exists, else the CPU; cpu; gpu.
+    /// auto: a hardware GPU if there is one, else the CPU (also instead of a software adapter
+    /// such as llvmpipe); cpu; gpu.
     #[arg(long, default_value = "auto")]
     backend: BackendChoice,
     /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
@@ -239,6 +244,13 @@ fn parse_strain_max(s: &str) -> Result<f32, String> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Some(n) = cli.threads {
+        // The CPU stages run on rayon's global pool; sized once, before any of them runs.
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n as usize)
+            .build_global()
+            .expect("the global thread pool is built only here");
+    }
     match execute(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -298,9 +310,15 @@ fn execute(command: Command) -> Result<(), Error> {
                 Some(a) => println!("--adapter auto picks: {} ({})", a.name, info.auto_reason),
                 None => println!("--adapter auto finds none: {}", info.auto_reason),
             }
+            if info.auto.as_ref().is_none_or(|a| a.device_type == "cpu") {
+                println!("--backend auto runs the CPU path (no hardware GPU)");
+            }
             println!("cpu: {}", drapekit::bench::cpu_description());
             let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-            println!("cpu threads: {threads} available (the CPU backend uses one)");
+            println!(
+                "cpu threads: {threads} available (the CPU backend uses {}; --threads N)",
+                rayon::current_num_threads()
+            );
             Ok(())
         }
         Command::Plan { scene, json } => {
@@ -436,12 +454,11 @@ fn execute(command: Command) -> Result<(), Error> {
 
 /// The lines `run` and `resume` print when they finish.
 fn report(summary: &drapekit::output::Summary, out_dir: &std::path::Path) {
-    let device = summary
-        .adapter
-        .as_ref()
-        .map_or("single-threaded CPU".to_string(), |a| {
-            format!("{} ({}, {})", a.name, a.backend, a.device_type)
-        });
+    let device = match (&summary.adapter, summary.cpu_threads) {
+        (Some(a), _) => format!("{} ({}, {})", a.name, a.backend, a.device_type),
+        (None, Some(1)) => "CPU, 1 thread".to_string(),
+        (None, n) => format!("CPU, {} threads", n.unwrap_or(1)),
+    };
     println!(
         "simulated {:.2} s ({} frames × {} substeps, {}) on the {} backend [{}] in {:.2} s: {:.3e} particle-substeps/s",
         summary.simulated_seconds,

@@ -15,6 +15,8 @@ pub struct Summary {
     pub backend_note: Option<String>,
     /// The GPU adapter (name, driver, backend, device_type), or null on the CPU.
     pub adapter: Option<AdapterReport>,
+    /// The CPU backend's rayon threads (`--threads`), or null on the GPU.
+    pub cpu_threads: Option<usize>,
     /// Particles.
     pub particles: usize,
     /// Triangles.

@@ -23,7 +23,8 @@ pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 /// Which path runs the simulation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BackendChoice {
-    /// The GPU when an adapter exists, else the CPU (and the summary says so).
+    /// A hardware GPU when there is one; else (no adapter, or only a software rasteriser such
+    /// as llvmpipe) the multi-threaded CPU path, and the summary says why.
     Auto,
     /// The CPU reference path.
     Cpu,
@@ -72,6 +73,9 @@ pub struct RunOptions {
 }
 
 /// Creates the chosen backend; with `Auto`, falls back to the CPU and returns a note saying why.
+/// `Auto` with `--adapter auto` skips software adapters (`DeviceType::Cpu`): the multi-threaded
+/// CPU path measured faster than lavapipe (README, "Benchmarks"). Naming an adapter, or
+/// `--backend gpu`, still runs it.
 pub fn make_solver(
     prep: &Prepared,
     choice: BackendChoice,
@@ -98,6 +102,14 @@ pub fn make_solver(
         BackendChoice::Cpu => Ok((cpu(), None)),
         BackendChoice::Gpu => Ok((gpu(&GpuContext::new(adapter)?)?, None)),
         BackendChoice::Auto => match GpuContext::new(adapter) {
+            Ok(ctx) if ctx.is_software() && !adapter_named(adapter) => Ok((
+                cpu(),
+                Some(format!(
+                    "only a software adapter ({}), ran on the CPU path with {} threads",
+                    ctx.info.name,
+                    rayon::current_num_threads()
+                )),
+            )),
             Ok(ctx) => Ok((gpu(&ctx)?, None)),
             Err(e) => Ok((
                 cpu(),
@@ -105,6 +117,12 @@ pub fn make_solver(
             )),
         },
     }
+}
+
+/// Whether the user picked the adapter (`--adapter` other than auto, or `WGPU_ADAPTER_NAME`).
+fn adapter_named(adapter: &AdapterChoice) -> bool {
+    *adapter != AdapterChoice::Auto
+        || std::env::var("WGPU_ADAPTER_NAME").is_ok_and(|name| !name.is_empty())
 }
 
 /// Runs a scene and writes its frames and `summary.json`. Bad input fails before anything is
@@ -309,6 +327,7 @@ fn run_scene_from(
         backend: solver.backend_name().to_string(),
         backend_note,
         adapter: solver.adapter(),
+        cpu_threads: (solver.backend_name() == "cpu").then(rayon::current_num_threads),
         particles: prep.model.len(),
         triangles: prep.model.triangles.len(),
         springs: prep.model.springs.len(),

@@ -62,8 +62,8 @@ impl BatchResult {
     }
 }
 
-/// The number of items run at once. Threads, not child processes: an item is one
-/// single-threaded CPU solver with no shared mutable state, a panic is caught per item
+/// The number of items run at once. Threads, not child processes: an item is one CPU
+/// solver with no shared mutable state (its particle loops share rayon's global pool), a panic is caught per item
 /// ([`item::run`]), and threads need no re-executing and re-validating per item. An abort or
 /// an out-of-memory kill does take the whole process down; the rerun then resumes it.
 /// On a GPU, items run one after another: one queue, and one item already fills it.

@@ -2,6 +2,7 @@
 
 use crate::model::layout::{Hinge, SimParams};
 use glam::{Vec3, Vec4};
+use rayon::prelude::*;
 
 /// Force on vertex `role` of hinge `h` (roles 0, 1: shared edge; 2, 3: opposite vertices).
 pub fn hinge_force(pos: &[Vec4], h: &Hinge, role: u32) -> Vec3 {
@@ -62,7 +63,8 @@ pub fn hinge_geometry(pos: &[Vec4], h: &Hinge, role: u32) -> Option<HingeGeometr
     })
 }
 
-/// Adds each particle's bending forces to `force`, gathered over its CSR hinge references.
+/// Adds each particle's bending forces to `force`, gathered over its CSR hinge references (in
+/// parallel over particles, each in its own fixed order: thread-count independent).
 pub fn bending_forces(
     params: &SimParams,
     pos: &[Vec4],
@@ -71,14 +73,18 @@ pub fn bending_forces(
     hinge_refs: &[u32],
     hinges: &[Hinge],
 ) {
-    for i in 0..params.num_particles as usize {
-        let mut f = Vec3::ZERO;
-        for k in hinge_offsets[i]..hinge_offsets[i + 1] {
-            let r = hinge_refs[k as usize];
-            f += hinge_force(pos, &hinges[(r / 4) as usize], r % 4);
-        }
-        force[i] += f.extend(0.0);
-    }
+    let n = params.num_particles as usize;
+    force[..n]
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(i, force)| {
+            let mut f = Vec3::ZERO;
+            for k in hinge_offsets[i]..hinge_offsets[i + 1] {
+                let r = hinge_refs[k as usize];
+                f += hinge_force(pos, &hinges[(r / 4) as usize], r % 4);
+            }
+            *force += f.extend(0.0);
+        });
 }
 
 #[cfg(test)]

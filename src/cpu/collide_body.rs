@@ -4,6 +4,7 @@
 use crate::body::sdf::sdf_sample;
 use crate::model::layout::{SimParams, SubstepParams};
 use glam::{Vec3, Vec4};
+use rayon::prelude::*;
 
 fn v3(a: [f32; 4]) -> Vec3 {
     Vec3::new(a[0], a[1], a[2])
@@ -81,7 +82,7 @@ fn safe_normalize(v: Vec3) -> Vec3 {
 }
 
 /// Collides every particle with the body through the SDF (in place: each particle reads and
-/// writes only its own state).
+/// writes only its own state, so particles run in parallel).
 pub fn collide_body(
     params: &SimParams,
     step: &SubstepParams,
@@ -89,13 +90,15 @@ pub fn collide_body(
     vel: &mut [Vec4],
     sdf: &[f32],
 ) {
-    for i in 0..params.num_particles as usize {
-        let (x, v) = collide_particle(params, step, pos[i], vel[i].truncate(), |p| {
+    let n = params.num_particles as usize;
+    let state = (&mut pos[..n], &mut vel[..n]);
+    state.into_par_iter().for_each(|(pos, vel)| {
+        let (x, v) = collide_particle(params, step, *pos, vel.truncate(), |p| {
             sample_body_sdf(params, sdf, p)
         });
-        pos[i] = x;
-        vel[i] = v.extend(0.0);
-    }
+        *pos = x;
+        *vel = v.extend(0.0);
+    });
 }
 
 /// The CPU-only edge response for cloth edge `e` in contact `c` (body frame), the edge

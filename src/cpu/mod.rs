@@ -1,5 +1,11 @@
 //! The CPU reference path: one plain-Rust twin per GPU stage, run in the same order on the
-//! same data, single-threaded so that it is the readable definition of the physics.
+//! same data, so that it is the readable definition of the physics.
+//!
+//! The per-particle stages are rayon parallel iterators over particles, each particle writing
+//! only its own result from reads of the previous arrays and summing its elements in a fixed
+//! order: no atomics, and the same bits on any number of threads (`tests/threads.rs`). They run
+//! on the caller's rayon pool (`--threads`). The spatial-hash build (a scatter) and the
+//! point–triangle self-collision reference (Gauss–Seidel) stay serial.
 
 mod bending_forces;
 mod collide_body;
@@ -41,6 +47,7 @@ use crate::model::{ClothModel, Csr};
 use crate::plan::{Pass, PassPlan};
 use crate::solver::{relative_residual, AdapterReport, ParticleState, Solver};
 use glam::{Vec2, Vec4};
+use rayon::prelude::*;
 
 /// The CPU backend. Holds data only for the stages in its plan.
 pub struct CpuSolver {
@@ -384,12 +391,13 @@ impl CpuSolver {
                     };
                     grad.extend(phi)
                 };
-                for i in 0..p.num_particles as usize {
-                    let (x, v) =
-                        collide_particle(p, step, self.pos[i], self.vel[i].truncate(), query);
-                    self.pos[i] = x;
-                    self.vel[i] = v.extend(0.0);
-                }
+                let n = p.num_particles as usize;
+                let state = (&mut self.pos[..n], &mut self.vel[..n]);
+                state.into_par_iter().for_each(|(pos, vel)| {
+                    let (x, v) = collide_particle(p, step, *pos, vel.truncate(), query);
+                    *pos = x;
+                    *vel = v.extend(0.0);
+                });
             }
         }
         if c.edges.is_some() {

@@ -3,8 +3,10 @@
 use crate::model::layout::{SimParams, SpringRef, WORKGROUP_SIZE};
 use crate::solver::HealthPartial;
 use glam::Vec4;
+use rayon::prelude::*;
 
-/// The kernel's partials, one per block of `WORKGROUP_SIZE` particles.
+/// The kernel's partials, one per block of `WORKGROUP_SIZE` particles. Blocks run in parallel;
+/// each reduces its own tree, and they are collected in block order.
 pub fn monitor(
     params: &SimParams,
     pos: &[Vec4],
@@ -15,6 +17,7 @@ pub fn monitor(
     let n = params.num_particles as usize;
     let size = WORKGROUP_SIZE as usize;
     (0..n.div_ceil(size).max(1))
+        .into_par_iter()
         .map(|group| {
             let mut slots: Vec<HealthPartial> = (0..size)
                 .map(|local| {

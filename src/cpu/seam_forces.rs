@@ -2,6 +2,7 @@
 
 use crate::model::layout::{Seam, SimParams, SubstepParams};
 use glam::{Vec3, Vec4};
+use rayon::prelude::*;
 
 /// The force on the seam vertex; the partner segment's ends get −(1 − w) and −w of it. The
 /// pair's rest gap is `rest` (m): see `rest_gap`.
@@ -29,7 +30,8 @@ pub fn rest_gap(s: &Seam, params: &SimParams, time: f32) -> f32 {
 }
 
 /// Adds each particle's seam forces to `force`, gathered over its CSR seam refs
-/// (pair index · 4 + role; role 0 is the seam vertex, 1 and 2 the partner segment's ends).
+/// (pair index · 4 + role; role 0 is the seam vertex, 1 and 2 the partner segment's ends), in
+/// parallel over particles, each in CSR order.
 #[allow(clippy::too_many_arguments)] // the kernel's bindings, one argument each
 pub fn seam_forces(
     params: &SimParams,
@@ -41,18 +43,22 @@ pub fn seam_forces(
     seam_refs: &[u32],
     seams: &[Seam],
 ) {
-    for i in 0..params.num_particles as usize {
-        let mut f = Vec3::ZERO;
-        for k in seam_offsets[i]..seam_offsets[i + 1] {
-            let r = seam_refs[k as usize];
-            let s = &seams[(r / 4) as usize];
-            let fa = seam_force(s, rest_gap(s, params, step.time), pos, vel);
-            match r % 4 {
-                0 => f += fa,
-                1 => f -= (1.0 - s.weight) * fa,
-                _ => f -= s.weight * fa,
+    let n = params.num_particles as usize;
+    force[..n]
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(i, force)| {
+            let mut f = Vec3::ZERO;
+            for k in seam_offsets[i]..seam_offsets[i + 1] {
+                let r = seam_refs[k as usize];
+                let s = &seams[(r / 4) as usize];
+                let fa = seam_force(s, rest_gap(s, params, step.time), pos, vel);
+                match r % 4 {
+                    0 => f += fa,
+                    1 => f -= (1.0 - s.weight) * fa,
+                    _ => f -= s.weight * fa,
+                }
             }
-        }
-        force[i] += f.extend(0.0);
-    }
+            *force += f.extend(0.0);
+        });
 }

@@ -2,8 +2,11 @@
 
 use crate::model::layout::{SimParams, SpringRef};
 use glam::Vec4;
+use rayon::prelude::*;
 
-/// Adds each particle's spring forces to `force`, gathered over its CSR springs.
+/// Adds each particle's spring forces to `force`, gathered over its CSR springs. Particles run
+/// in parallel; each sums its own springs in CSR order, so the result is the same on any
+/// number of threads.
 pub fn spring_forces(
     params: &SimParams,
     pos: &[Vec4],
@@ -12,21 +15,25 @@ pub fn spring_forces(
     spring_offsets: &[u32],
     springs: &[SpringRef],
 ) {
-    for i in 0..params.num_particles as usize {
-        let xi = pos[i].truncate();
-        let vi = vel[i].truncate();
-        let mut f = glam::Vec3::ZERO;
-        for k in spring_offsets[i]..spring_offsets[i + 1] {
-            let s = springs[k as usize];
-            let d = pos[s.other as usize].truncate() - xi;
-            let len = d.length();
-            if len > 1e-12 {
-                let dir = d / len;
-                let stretch = len - s.rest_length;
-                let closing_speed = (vel[s.other as usize].truncate() - vi).dot(dir);
-                f += (s.stiffness * stretch + s.damping * closing_speed) * dir;
+    let n = params.num_particles as usize;
+    force[..n]
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(i, force)| {
+            let xi = pos[i].truncate();
+            let vi = vel[i].truncate();
+            let mut f = glam::Vec3::ZERO;
+            for k in spring_offsets[i]..spring_offsets[i + 1] {
+                let s = springs[k as usize];
+                let d = pos[s.other as usize].truncate() - xi;
+                let len = d.length();
+                if len > 1e-12 {
+                    let dir = d / len;
+                    let stretch = len - s.rest_length;
+                    let closing_speed = (vel[s.other as usize].truncate() - vi).dot(dir);
+                    f += (s.stiffness * stretch + s.damping * closing_speed) * dir;
+                }
             }
-        }
-        force[i] += f.extend(0.0);
-    }
+            *force += f.extend(0.0);
+        });
 }

@@ -2,19 +2,25 @@
 
 use crate::model::layout::SimParams;
 use glam::Vec4;
+use rayon::prelude::*;
 
 /// The next state from the solved positions: x_{n+1} = x, v_{n+1} = (x − xₙ)/h. Pinned
-/// particles keep their position and have zero velocity.
+/// particles keep their position and have zero velocity. Particles run in parallel.
 pub fn vbd_finish(params: &SimParams, x: &[Vec4], pos: &mut [Vec4], vel: &mut [Vec4]) {
     let h = params.dt;
-    for i in 0..params.num_particles as usize {
-        let p = pos[i];
-        if p.w == 0.0 {
-            vel[i] = Vec4::ZERO;
-            continue;
-        }
-        let next = x[i].truncate();
-        vel[i] = ((next - p.truncate()) / h).extend(0.0);
-        pos[i] = next.extend(p.w);
-    }
+    let n = params.num_particles as usize;
+    let state = (&mut pos[..n], &mut vel[..n]);
+    state
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(i, (pos, vel))| {
+            let p = *pos;
+            if p.w == 0.0 {
+                *vel = Vec4::ZERO;
+                return;
+            }
+            let next = x[i].truncate();
+            *vel = ((next - p.truncate()) / h).extend(0.0);
+            *pos = next.extend(p.w);
+        });
 }

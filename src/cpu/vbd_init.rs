@@ -2,6 +2,7 @@
 
 use crate::model::layout::SimParams;
 use glam::Vec4;
+use rayon::prelude::*;
 
 /// The inertial target y = xₙ + h·vₙ + h²·a of every particle, with a = g + f/m (f: the
 /// external forces the force stages summed, i.e. wind), and the starting guess of the solve,
@@ -10,6 +11,7 @@ use glam::Vec4;
 /// stretches. Vertex Block Descent's adaptive guess, which adds the part of the last step's
 /// acceleration along a, let a stiff hanging cloth gain energy between frames in our tests.)
 /// Pinned particles stay where they are. Clears the force accumulator, as `integrate` does.
+/// Particles are independent and run in parallel.
 pub fn vbd_init(
     params: &SimParams,
     pos: &[Vec4],
@@ -20,18 +22,22 @@ pub fn vbd_init(
 ) {
     let h = params.dt;
     let gravity = Vec4::from(params.gravity).truncate();
-    for i in 0..params.num_particles as usize {
-        let p = pos[i];
-        let f = force[i].truncate();
-        force[i] = Vec4::ZERO;
-        if p.w == 0.0 {
-            y[i] = p;
-            x[i] = p;
-            continue;
-        }
-        let a = f * p.w + gravity;
-        let start = p.truncate() + h * vel[i].truncate();
-        y[i] = (start + h * h * a).extend(p.w);
-        x[i] = start.extend(p.w);
-    }
+    let n = params.num_particles as usize;
+    let out = (&mut force[..n], &mut x[..n], &mut y[..n]);
+    out.into_par_iter()
+        .enumerate()
+        .for_each(|(i, (force, x, y))| {
+            let p = pos[i];
+            let f = force.truncate();
+            *force = Vec4::ZERO;
+            if p.w == 0.0 {
+                *y = p;
+                *x = p;
+                return;
+            }
+            let a = f * p.w + gravity;
+            let start = p.truncate() + h * vel[i].truncate();
+            *y = (start + h * h * a).extend(p.w);
+            *x = start.extend(p.w);
+        });
 }

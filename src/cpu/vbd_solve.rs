@@ -11,6 +11,7 @@ use super::collide_body::{body_velocity_at, sample_body_sdf, to_body_frame, to_w
 use super::seam_forces::rest_gap;
 use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep, SWEEP_LAST};
 use glam::{Mat3, Vec2, Vec3, Vec4};
+use rayon::prelude::*;
 
 /// The elements a vertex gathers over, as CSR lists (the same arrays the force stages use).
 pub struct VbdElements<'a> {
@@ -187,6 +188,10 @@ pub const STANDARD_GRAVITY: f32 = 9.80665;
 /// One sweep: every free vertex of the colour takes its Newton step, in place. The last
 /// iteration records, before the step, the vertex's squared weight m²g² (x) and squared
 /// unbalanced force |f|² (y) in `residual`.
+///
+/// A vertex's system reads only itself and vertices of other colours, so the colour's steps
+/// are computed in parallel from the same `x` and then written: the same numbers as one
+/// vertex after another, on any number of threads.
 #[allow(clippy::too_many_arguments)] // the kernel's bindings, one argument each
 pub fn vbd_solve(
     params: &SimParams,
@@ -199,18 +204,30 @@ pub fn vbd_solve(
     residual: &mut [Vec2],
     el: &VbdElements,
 ) {
-    for k in sweep.first..sweep.first + sweep.count {
-        let i = order[k as usize] as usize;
-        if prev[i].w == 0.0 {
-            continue;
-        }
-        let (f, hess) = vertex_system(params, step, i, x, prev, y, el);
-        if sweep.flags & SWEEP_LAST != 0 {
+    let colour = &order[sweep.first as usize..(sweep.first + sweep.count) as usize];
+    let x_now: &[Vec4] = x;
+    let updates: Vec<(usize, Vec4, Option<Vec2>)> = colour
+        .par_iter()
+        .filter_map(|&i| {
+            let i = i as usize;
+            if prev[i].w == 0.0 {
+                return None;
+            }
+            let (f, hess) = vertex_system(params, step, i, x_now, prev, y, el);
             // The last sweep records the unbalanced force against the vertex's weight.
-            let g = Vec4::from(params.gravity).truncate().length();
-            let weight = (1.0 / prev[i].w) * if g > 0.0 { g } else { STANDARD_GRAVITY };
-            residual[i] = Vec2::new(weight * weight, f.dot(f));
+            let r = (sweep.flags & SWEEP_LAST != 0).then(|| {
+                let g = Vec4::from(params.gravity).truncate().length();
+                let weight = (1.0 / prev[i].w) * if g > 0.0 { g } else { STANDARD_GRAVITY };
+                Vec2::new(weight * weight, f.dot(f))
+            });
+            let next = (x_now[i].truncate() + solve3(hess, f)).extend(prev[i].w);
+            Some((i, next, r))
+        })
+        .collect();
+    for (i, next, r) in updates {
+        x[i] = next;
+        if let Some(r) = r {
+            residual[i] = r;
         }
-        x[i] = (x[i].truncate() + solve3(hess, f)).extend(prev[i].w);
     }
 }

@@ -189,6 +189,11 @@ impl GpuContext {
         }
     }
 
+    /// A software rasteriser (llvmpipe, lavapipe, WARP): wgpu's `DeviceType::Cpu`.
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
     /// The adapter as reported in summaries and benchmarks.
     pub fn report(&self) -> AdapterReport {
         report(&self.info)
