@@ -42,7 +42,16 @@ pub fn estimated_particles(scene: &Scene) -> Result<Option<u64>, InputError> {
             let area: f64 = (pattern.panels.iter())
                 .map(|p| 0.5 * p.signed_area2().abs() / (unit * unit))
                 .sum();
-            Some((area * particles_per_m2(options.particle_distance)).ceil() as u64)
+            // Outlines count too: a long thin panel (or a stray control point) has little
+            // area but a long edge, every sample of which is a particle.
+            let outline: f64 = (pattern.panels.iter())
+                .flat_map(|p| &p.edges)
+                .map(|e| e.curve.length() / unit)
+                .sum();
+            let by_area = area * particles_per_m2(options.particle_distance);
+            let by_outline = outline / options.particle_distance;
+            // `as` saturates: an infinite estimate becomes u64::MAX, which the cap refuses.
+            Some(by_area.max(by_outline).ceil() as u64)
         }
         ClothSource::Mesh { .. } => None,
     })
@@ -69,12 +78,26 @@ pub fn check_budget(scene: &Scene) -> Result<(), InputError> {
         path: &scene.path,
         src: &scene.source,
     };
-    let problem = format!(
+    let mut problem = format!(
         "about {particles} particles need about {:.0} MiB, above the memory cap of {:.0} MiB \
          ([solver] max_memory_mb, default half the machine's memory)",
         mib(need),
         mib(cap)
     );
+    if let ClothSource::Pattern { path, options, .. } = &scene.cloth {
+        if let Ok(p) = Pattern::load(path) {
+            let outline: f64 = (p.panels.iter().flat_map(|p| &p.edges))
+                .map(|e| e.curve.length() / p.units_in_meter)
+                .sum();
+            if outline / options.particle_distance >= particles as f64 {
+                problem.push_str(&format!(
+                    "; the panel outlines alone are {outline:.3e} m long: check {}'s edges \
+                     and units_in_meter",
+                    path.display()
+                ));
+            }
+        }
+    }
     Err(match &scene.cloth {
         ClothSource::Grid { columns, rows, .. } => c.err(
             "cloth.grid",
