@@ -5,16 +5,6 @@ use crate::pattern::garment::SeamPair;
 use crate::solver::ParticleState;
 use glam::Vec4;
 
-/// Kinetic energy ½·Σm·v² of the free particles, in J (summed in f64).
-pub fn kinetic_energy(model: &ClothModel, state: &ParticleState) -> f64 {
-    (0..model.len())
-        .filter(|&i| !model.pinned[i])
-        .map(|i| {
-            0.5 * model.masses[i] as f64 * state.velocities[i].truncate().length_squared() as f64
-        })
-        .sum()
-}
-
 /// Largest relative stretch (L − L0)/L0 over all springs.
 pub fn max_edge_strain(positions: &[Vec4], springs: &[Spring]) -> f32 {
     springs

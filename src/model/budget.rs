@@ -6,6 +6,7 @@ use crate::check::Checker;
 use crate::error::InputError;
 use crate::pattern::Pattern;
 use crate::scene::{ClothSource, Scene};
+use std::path::Path;
 
 /// Peak memory per particle of a run, in bytes: 1,115 measured (peak resident set of an
 /// implicit CPU run of a 1000 × 1000 grid writing one frame: 1,089,508 KiB), rounded up. The GPU
@@ -37,24 +38,28 @@ pub fn estimated_particles(scene: &Scene) -> Result<Option<u64>, InputError> {
     Ok(match &scene.cloth {
         ClothSource::Grid { columns, rows, .. } => Some(*columns as u64 * *rows as u64),
         ClothSource::Pattern { path, options, .. } => {
-            let pattern = Pattern::load(path)?;
-            let unit = pattern.units_in_meter;
-            let area: f64 = (pattern.panels.iter())
-                .map(|p| 0.5 * p.signed_area2().abs() / (unit * unit))
-                .sum();
-            // Outlines count too: a long thin panel (or a stray control point) has little
-            // area but a long edge, every sample of which is a particle.
-            let outline: f64 = (pattern.panels.iter())
-                .flat_map(|p| &p.edges)
-                .map(|e| e.curve.length() / unit)
-                .sum();
-            let by_area = area * particles_per_m2(options.particle_distance);
-            let by_outline = outline / options.particle_distance;
+            let (by_area, by_outline, _) = pattern_estimate(path, options.particle_distance)?;
             // `as` saturates: an infinite estimate becomes u64::MAX, which the cap refuses.
             Some(by_area.max(by_outline).ceil() as u64)
         }
         ClothSource::Mesh { .. } => None,
     })
+}
+
+/// A pattern's particles by panel area and by outline length at `spacing`, and the outline
+/// length in m. Outlines count too: a long thin panel (or a stray control point) has little
+/// area but a long edge, every sample of which is a particle.
+fn pattern_estimate(path: &Path, spacing: f64) -> Result<(f64, f64, f64), InputError> {
+    let pattern = Pattern::load(path)?;
+    let unit = pattern.units_in_meter;
+    let area: f64 = (pattern.panels.iter())
+        .map(|p| 0.5 * p.signed_area2().abs() / (unit * unit))
+        .sum();
+    let outline: f64 = (pattern.panels.iter())
+        .flat_map(|p| &p.edges)
+        .map(|e| e.curve.length() / unit)
+        .sum();
+    Ok((area * particles_per_m2(spacing), outline / spacing, outline))
 }
 
 /// Refuses (bad input, naming the key to change and a value that fits) a scene whose estimated
@@ -85,17 +90,13 @@ pub fn check_budget(scene: &Scene) -> Result<(), InputError> {
         mib(cap)
     );
     if let ClothSource::Pattern { path, options, .. } = &scene.cloth {
-        if let Ok(p) = Pattern::load(path) {
-            let outline: f64 = (p.panels.iter().flat_map(|p| &p.edges))
-                .map(|e| e.curve.length() / p.units_in_meter)
-                .sum();
-            if outline / options.particle_distance >= particles as f64 {
-                problem.push_str(&format!(
-                    "; the panel outlines alone are {outline:.3e} m long: check {}'s edges \
-                     and units_in_meter",
-                    path.display()
-                ));
-            }
+        let (by_area, by_outline, outline) = pattern_estimate(path, options.particle_distance)?;
+        if by_outline >= by_area {
+            problem.push_str(&format!(
+                "; the panel outlines alone are {outline:.3e} m long: check {}'s edges and \
+                 units_in_meter",
+                path.display()
+            ));
         }
     }
     Err(match &scene.cloth {
