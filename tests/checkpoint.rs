@@ -8,20 +8,14 @@ use drapekit::scene::Scene;
 use drapekit::sim::{prepare, simulate, RunStats};
 use drapekit::solver::Solver;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn drapekit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_drapekit"))
-        .args(args)
-        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
-        .output()
-        .unwrap()
+fn drapekit(args: &[&str]) -> std::process::Output {
+    common::drapekit(args)
 }
 
 fn out_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("drapekit-ckpt-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+    common::out_dir("ckpt", name)
 }
 
 fn summary(dir: &Path) -> serde_json::Value {

@@ -7,20 +7,13 @@ use drapekit::plan::Pass;
 use drapekit::scene::Scene;
 use drapekit::sim::prepare;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn drapekit(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_drapekit"))
-        .args(args)
-        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
-        .output()
-        .unwrap()
+    common::drapekit(args)
 }
 
 fn out_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("drapekit-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+    common::out_dir("cli", name)
 }
 
 #[test]

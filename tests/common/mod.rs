@@ -127,3 +127,20 @@ pub fn sheet(color: glam::Vec3) -> drapekit::preview::DrawMesh {
     }
     m
 }
+
+/// Runs the drapekit binary with `args` and waits for it.
+pub fn drapekit(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .args(args)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .unwrap()
+}
+
+/// A fresh (removed) folder under the temporary directory, unique to this process, `tag`
+/// (the test file) and `name`.
+pub fn out_dir(tag: &str, name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("drapekit-{tag}-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
