@@ -13,7 +13,6 @@
 pub mod atomic_file;
 pub mod batch;
 pub mod bench;
-pub mod bench_integrators;
 pub mod body;
 pub mod check;
 pub mod checkpoint;

@@ -1,5 +1,7 @@
 //! The `drapekit` command line: parses arguments, calls the library, reports.
 
+mod cli;
+
 use clap::{Parser, Subcommand};
 use drapekit::gpu::AdapterChoice;
 use drapekit::run::{run_scene, BackendChoice, RunOptions};
@@ -133,34 +135,9 @@ enum Command {
     },
     /// Run a manifest of scenes (JSON Lines), or one shard of it; `batch report DIR` tabulates.
     Batch(BatchCli),
-    /// Time whole substeps on both backends and write CSV and Markdown tables.
-    #[command(after_help = "Examples:\n  \
-        drapekit bench --sizes 64,128 --repeats 3 --out out/bench\n  \
-        drapekit bench --scene fixtures/scenes/hanging_cloth.toml --frames 24 --out out/integrators")]
-    Bench {
-        /// Grid sizes: N means an N×N particle grid.
-        #[arg(long, value_delimiter = ',', default_value = "64,128,256")]
-        sizes: Vec<u32>,
-        /// Substeps per timed batch (one submission on the GPU).
-        #[arg(long, default_value_t = 100)]
-        substeps: u32,
-        /// Timed batches per size and backend; the median is reported.
-        #[arg(long, default_value_t = 5)]
-        repeats: u32,
-        /// Output folder for bench.csv and bench.md.
-        #[arg(long, default_value = "out/bench")]
-        out: PathBuf,
-        /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
-        #[arg(long, default_value = "auto")]
-        adapter: AdapterChoice,
-        /// Instead of the grid sizes: run this scene under symplectic and implicit Euler on both
-        /// backends and write integrators.csv and integrators.md.
-        #[arg(long)]
-        scene: Option<PathBuf>,
-        /// With --scene: output frames per point (default: the scene's).
-        #[arg(long)]
-        frames: Option<u32>,
-    },
+    /// Benchmarks: whole substeps at several grid sizes (default), one scene under two
+    /// integrators (--scene), or a subcommand.
+    Bench(cli::bench::BenchCli),
 }
 
 /// `drapekit batch MANIFEST --out DIR [...]`, or `drapekit batch report DIR`.
@@ -434,21 +411,7 @@ fn execute(command: Command) -> Result<(), Error> {
                 retries: b.retries,
             },
         }),
-        Command::Bench {
-            scene: Some(scene),
-            frames,
-            out,
-            adapter,
-            ..
-        } => drapekit::bench_integrators::run_cli(&scene, frames, &out, &adapter).map(|_| ()),
-        Command::Bench {
-            sizes,
-            substeps,
-            repeats,
-            out,
-            adapter,
-            ..
-        } => drapekit::bench::run_cli(&sizes, substeps, repeats, &out, &adapter),
+        Command::Bench(b) => cli::bench::execute(b),
     }
 }
 

@@ -26,10 +26,11 @@ const LAYERS: &[(&str, u32)] = &[
     ("output", 8),
     ("export", 8),
     ("bench", 8),
-    ("bench_integrators", 8),
     ("plot", 8),
     ("preview", 8),
     ("batch", 8),
+    // The binary's own modules (not in lib.rs): they see the library as `drapekit::`.
+    ("cli", 9),
 ];
 
 fn rust_files(dir: &Path, out: &mut Vec<std::path::PathBuf>) {

@@ -2,8 +2,8 @@
 //! and implicit Euler (at the scene's step), on both backends, in one run: wall time per
 //! simulated second, particle-substeps/s and the largest strain, as CSV and Markdown.
 
+use super::cpu_threads_description;
 use crate::atomic_file::write_atomic;
-use crate::bench::cpu_threads_description;
 use crate::cpu::CpuSolver;
 use crate::error::Error;
 use crate::gpu::{AdapterChoice, GpuContext, GpuSolver};

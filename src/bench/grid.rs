@@ -1,8 +1,9 @@
-//! `drapekit bench`: whole-substep throughput on both backends, as CSV and Markdown tables and
+//! `drapekit bench --sizes …`: whole-substep throughput on both backends, as CSV and Markdown tables and
 //! an SVG plot.
 //! The criterion benches in `benches/` use the same model builder, so the two agree on what
 //! "a substep at 256²" means.
 
+use super::cpu_threads_description;
 use crate::atomic_file::write_atomic;
 use crate::cpu::CpuSolver;
 use crate::error::Error;
@@ -96,33 +97,6 @@ fn median_batch(
     }
     times.sort_by(|a, b| a.total_cmp(b));
     Ok(times[times.len() / 2])
-}
-
-/// The CPU's model name and core count, from /proc/cpuinfo where available.
-pub fn cpu_description() -> String {
-    let model = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
-    let cores = std::thread::available_parallelism()
-        .map(|n| n.get())
-        .unwrap_or(1);
-    format!("{model}, {cores} cores")
-}
-
-/// The CPU and the rayon threads the CPU twin runs on (`--threads`).
-pub fn cpu_threads_description() -> String {
-    let n = rayon::current_num_threads();
-    format!(
-        "{}, {n} thread{}",
-        cpu_description(),
-        if n == 1 { "" } else { "s" }
-    )
 }
 
 /// Times whole substeps for each size on the CPU twin and the GPU path.

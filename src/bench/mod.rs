@@ -1,0 +1,37 @@
+//! `drapekit bench …`: what drapekit costs, measured by drapekit itself, as CSV and Markdown
+//! tables and SVG plots that anyone reproduces with one command.
+//!
+//! - [`grid`]: whole substeps of the benchmark cloth at several sizes, on both backends;
+//! - [`integrators`]: one scene under symplectic and implicit Euler, on both backends.
+
+pub mod grid;
+pub mod integrators;
+
+pub use grid::{bench_model, bench_steps, BenchRow};
+
+/// The CPU's model name and core count, from /proc/cpuinfo where available.
+pub fn cpu_description() -> String {
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
+    format!("{model}, {cores} cores")
+}
+
+/// The CPU and the rayon threads the CPU twin runs on (`--threads`).
+pub fn cpu_threads_description() -> String {
+    let n = rayon::current_num_threads();
+    format!(
+        "{}, {n} thread{}",
+        cpu_description(),
+        if n == 1 { "" } else { "s" }
+    )
+}

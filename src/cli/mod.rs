@@ -1,0 +1,4 @@
+//! The command line's larger subcommands, one file each; `main.rs` holds the rest and dispatches.
+//! Part of the binary, not the library: it parses arguments and calls `drapekit::…`.
+
+pub mod bench;
