@@ -220,6 +220,11 @@ fn parse_strain_max(s: &str) -> Result<f32, String> {
 }
 
 fn main() -> ExitCode {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        // Mesa's Vulkan loader prints a harmless error per adapter without it; set before any
+        // thread starts.
+        std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir());
+    }
     let cli = Cli::parse();
     if let Some(n) = cli.threads {
         // The CPU stages run on rayon's global pool; sized once, before any of them runs.
@@ -286,6 +291,22 @@ fn execute(command: Command) -> Result<(), Error> {
             match &info.auto {
                 Some(a) => println!("--adapter auto picks: {} ({})", a.name, info.auto_reason),
                 None => println!("--adapter auto finds none: {}", info.auto_reason),
+            }
+            if let Some(l) = &info.auto_limits {
+                println!(
+                    "its limits: 2D textures up to {} px, so arrays of up to {} elements (about \
+                     {} particles on the GPU path); {} workgroups per dispatch dimension, {} \
+                     invocations per workgroup; {} sampled and {} storage textures per stage; \
+                     buffers up to {} MiB",
+                    l.max_texture_dimension_2d,
+                    l.max_array_elements,
+                    l.max_particles,
+                    l.max_compute_workgroups_per_dimension,
+                    l.max_compute_invocations_per_workgroup,
+                    l.max_sampled_textures_per_shader_stage,
+                    l.max_storage_textures_per_shader_stage,
+                    l.max_buffer_size >> 20
+                );
             }
             if info.auto.as_ref().is_none_or(|a| a.device_type == "cpu") {
                 println!("--backend auto runs the CPU path (no hardware GPU)");

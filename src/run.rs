@@ -81,42 +81,58 @@ pub fn make_solver(
     choice: BackendChoice,
     adapter: &AdapterChoice,
 ) -> Result<(Box<dyn Solver>, Option<String>), Error> {
-    let cpu = || {
-        let mut solver = CpuSolver::new(&prep.model, prep.params, &prep.plan);
-        if prep.cpu_point_triangle {
-            solver.use_point_triangle_reference();
-        }
-        Box::new(solver) as Box<dyn Solver>
-    };
-    let gpu = |ctx: &GpuContext| -> Result<Box<dyn Solver>, Error> {
-        let batch = prep.substeps as usize;
-        Ok(Box::new(GpuSolver::new(
-            ctx,
-            &prep.model,
-            prep.params,
-            &prep.plan,
-            batch,
-        )?))
-    };
+    let (device, note) = choose_device(choice, adapter)?;
+    Ok((build_solver(prep, device.as_ref())?, note))
+}
+
+/// The GPU device a run will use (`None`: the CPU path), and a note when `Auto` fell back to
+/// the CPU. Opened before the model is built, so that its limits can refuse a scene early.
+pub fn choose_device(
+    choice: BackendChoice,
+    adapter: &AdapterChoice,
+) -> Result<(Option<GpuContext>, Option<String>), Error> {
     match choice {
-        BackendChoice::Cpu => Ok((cpu(), None)),
-        BackendChoice::Gpu => Ok((gpu(&GpuContext::new(adapter)?)?, None)),
+        BackendChoice::Cpu => Ok((None, None)),
+        BackendChoice::Gpu => Ok((Some(GpuContext::new(adapter)?), None)),
         BackendChoice::Auto => match GpuContext::new(adapter) {
             Ok(ctx) if ctx.is_software() && !adapter_named(adapter) => Ok((
-                cpu(),
+                None,
                 Some(format!(
                     "only a software adapter ({}), ran on the CPU path with {} threads",
                     ctx.info.name,
                     rayon::current_num_threads()
                 )),
             )),
-            Ok(ctx) => Ok((gpu(&ctx)?, None)),
+            Ok(ctx) => Ok((Some(ctx), None)),
             Err(e) => Ok((
-                cpu(),
+                None,
                 Some(format!("no GPU adapter, ran on the CPU path ({e})")),
             )),
         },
     }
+}
+
+/// The solver for a prepared run: the GPU path on `device`, else the CPU path.
+pub fn build_solver(
+    prep: &Prepared,
+    device: Option<&GpuContext>,
+) -> Result<Box<dyn Solver>, Error> {
+    Ok(match device {
+        Some(ctx) => Box::new(GpuSolver::new(
+            ctx,
+            &prep.model,
+            prep.params,
+            &prep.plan,
+            prep.substeps as usize,
+        )?),
+        None => {
+            let mut solver = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+            if prep.cpu_point_triangle {
+                solver.use_point_triangle_reference();
+            }
+            Box::new(solver)
+        }
+    })
 }
 
 /// Whether the user picked the adapter (`--adapter` other than auto, or `WGPU_ADAPTER_NAME`).
@@ -180,8 +196,17 @@ fn run_scene_from(
     if let Some(frames) = opts.frames {
         scene.solver.frames = frames;
     }
+    let (device, backend_note) = choose_device(opts.backend, &opts.adapter)?;
+    if let Some(ctx) = &device {
+        // Refused from the scene alone, before anything is built.
+        crate::model::budget::check_gpu_textures(&scene, ctx.max_texels())?;
+    }
     let prep = prepare(&scene)?;
-    let (mut solver, backend_note) = make_solver(&prep, opts.backend, &opts.adapter)?;
+    if let Some(ctx) = &device {
+        // The estimate cannot see an OBJ cloth's size; the built model can.
+        crate::model::budget::check_model_textures(&scene, &prep.model, ctx.max_texels())?;
+    }
+    let mut solver = build_solver(&prep, device.as_ref())?;
     if let Some(note) = &backend_note {
         eprintln!("drapekit: {note}");
     }

@@ -21,16 +21,22 @@ fn every_bad_scene_is_refused_cleanly() {
             .next()
             .and_then(|l| l.strip_prefix("# expect: "))
             .unwrap_or_else(|| panic!("{} lacks its '# expect: ' line", path.display()));
+        // "# backend: gpu" on the second line: a limit of the GPU path, checked on the
+        // fallback adapter.
+        let gpu = text.lines().nth(1) == Some("# backend: gpu");
+        if gpu && common::gpu().is_none() {
+            continue;
+        }
         let out = tempdir(&path);
+        let backend: &[&str] = if gpu {
+            &["--backend", "gpu", "--adapter", "fallback"]
+        } else {
+            &["--backend", "cpu"]
+        };
         let result = Command::new(env!("CARGO_BIN_EXE_drapekit"))
-            .args([
-                "run",
-                path.to_str().unwrap(),
-                "--backend",
-                "cpu",
-                "--out",
-                out.to_str().unwrap(),
-            ])
+            .args(["run", path.to_str().unwrap()])
+            .args(backend)
+            .args(["--out", out.to_str().unwrap()])
             .output()
             .unwrap();
         let stderr = String::from_utf8_lossy(&result.stderr);
@@ -154,4 +160,27 @@ fn an_oversized_grid_is_refused_in_well_under_a_second() {
     // Process start and a TOML parse take milliseconds; building 64M particles would take
     // minutes and tens of GB.
     assert!(elapsed < 1.0, "took {elapsed} s");
+}
+
+#[test]
+fn a_built_model_too_large_for_the_gpu_names_its_largest_array() {
+    // An OBJ cloth has no estimate, so the GPU path checks the built model. A limit just
+    // below the hanging cloth's largest array (its hinge list: 4 entries per hinge) must
+    // refuse it with the array's size and a vertex count that fits; at the array's size it fits.
+    let scene =
+        drapekit::scene::Scene::load(&common::fixture("scenes/hanging_cloth.toml")).unwrap();
+    let model = scene.build_model().unwrap().model;
+    let largest = model.largest_array() as u64;
+    assert_eq!(
+        largest,
+        4 * model.hinges.len() as u64,
+        "the hinge list is the largest"
+    );
+    let check = |limit| drapekit::model::budget::check_model_textures(&scene, &model, limit);
+    assert!(check(largest).is_ok());
+    let refused = check(largest - 1).unwrap_err().to_string();
+    assert!(
+        refused.contains(&format!("an array of {largest} elements")) && refused.contains("fix:"),
+        "{refused}"
+    );
 }

@@ -400,6 +400,12 @@ fn info_lists_the_adapters_and_the_cpu() {
             stdout.contains("adapter: ") && stdout.contains("--adapter auto picks"),
             "{stdout}"
         );
+        // The limits of auto's adapter, with what they mean for a run.
+        assert!(
+            stdout.contains("its limits: 2D textures up to ")
+                && stdout.contains("particles on the GPU path"),
+            "{stdout}"
+        );
     }
 }
 

@@ -46,6 +46,48 @@ pub struct AdapterList {
     pub auto: Option<AdapterReport>,
     /// Why that one (or why none).
     pub auto_reason: String,
+    /// The limits of that adapter which bound what drapekit can run on it.
+    pub auto_limits: Option<LimitsReport>,
+}
+
+/// The adapter limits that bound a drapekit run, as `drapekit info` prints them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LimitsReport {
+    /// Largest 2D texture side, in texels: every array is a texture of this many rows at most.
+    pub max_texture_dimension_2d: u32,
+    /// The most elements one array holds: those rows of `TEXELS_PER_ROW` texels.
+    pub max_array_elements: u64,
+    /// About the most particles the GPU path takes (its largest array, the hinge list, holds
+    /// `GPU_ELEMENTS_PER_PARTICLE` entries per particle).
+    pub max_particles: u64,
+    /// Workgroups per dispatch dimension (large meshes dispatch in 2D).
+    pub max_compute_workgroups_per_dimension: u32,
+    /// Invocations per workgroup (the kernels use 64).
+    pub max_compute_invocations_per_workgroup: u32,
+    /// Sampled textures per stage (a stage binds its input arrays as these).
+    pub max_sampled_textures_per_shader_stage: u32,
+    /// Storage textures per stage (a stage writes its outputs as these).
+    pub max_storage_textures_per_shader_stage: u32,
+    /// Largest buffer, in bytes.
+    pub max_buffer_size: u64,
+}
+
+impl LimitsReport {
+    /// The report for an adapter's limits.
+    pub fn new(l: &wgpu::Limits) -> Self {
+        let max_array_elements =
+            l.max_texture_dimension_2d as u64 * crate::model::layout::TEXELS_PER_ROW as u64;
+        LimitsReport {
+            max_texture_dimension_2d: l.max_texture_dimension_2d,
+            max_array_elements,
+            max_particles: max_array_elements / crate::model::budget::GPU_ELEMENTS_PER_PARTICLE,
+            max_compute_workgroups_per_dimension: l.max_compute_workgroups_per_dimension,
+            max_compute_invocations_per_workgroup: l.max_compute_invocations_per_workgroup,
+            max_sampled_textures_per_shader_stage: l.max_sampled_textures_per_shader_stage,
+            max_storage_textures_per_shader_stage: l.max_storage_textures_per_shader_stage,
+            max_buffer_size: l.max_buffer_size,
+        }
+    }
 }
 
 /// The adapters on this machine and `auto`'s choice among them.
@@ -59,22 +101,22 @@ pub fn adapters() -> AdapterList {
     let (auto, auto_reason) = match std::env::var("WGPU_ADAPTER_NAME") {
         Ok(name) if !name.is_empty() => {
             match GpuContext::new(&AdapterChoice::Named(name.clone())) {
-                Ok(ctx) => (Some(ctx.report()), format!("WGPU_ADAPTER_NAME={name}")),
+                Ok(ctx) => (Some(ctx), format!("WGPU_ADAPTER_NAME={name}")),
                 Err(e) => (None, e.to_string()),
             }
         }
         _ => match GpuContext::new(&AdapterChoice::Auto) {
-            Ok(ctx) => (
-                Some(ctx.report()),
-                "wgpu's high-performance choice".to_string(),
-            ),
+            Ok(ctx) => (Some(ctx), "wgpu's high-performance choice".to_string()),
             Err(e) => (None, e.to_string()),
         },
     };
     AdapterList {
         adapters,
-        auto,
+        auto: auto.as_ref().map(GpuContext::report),
         auto_reason,
+        auto_limits: auto
+            .as_ref()
+            .map(|ctx| LimitsReport::new(&ctx.adapter_limits)),
     }
 }
 
@@ -87,6 +129,8 @@ pub struct GpuContext {
     pub queue: wgpu::Queue,
     /// What the adapter says about itself.
     pub info: wgpu::AdapterInfo,
+    /// What the adapter could give (the device asks for less: see `new`).
+    pub adapter_limits: wgpu::Limits,
     /// A device loss and the first uncaptured GPU error, recorded by wgpu's callbacks (which
     /// would otherwise panic) and turned into `Error::Gpu` by `check`.
     failure: std::sync::Arc<std::sync::Mutex<[Option<String>; 2]>>,
@@ -171,6 +215,7 @@ impl GpuContext {
             device,
             queue,
             info,
+            adapter_limits: available,
             failure,
         })
     }
@@ -187,6 +232,13 @@ impl GpuContext {
                  with drapekit resume OUT (runs with --checkpoint-every N), or use --backend cpu"
             ))),
         }
+    }
+
+    /// The most elements one array may hold: its texture's rows (the device's largest 2D
+    /// texture) of `TEXELS_PER_ROW` texels (see texels.rs).
+    pub fn max_texels(&self) -> u64 {
+        self.device.limits().max_texture_dimension_2d as u64
+            * crate::model::layout::TEXELS_PER_ROW as u64
     }
 
     /// A software rasteriser (llvmpipe, lavapipe, WARP): wgpu's `DeviceType::Cpu`.

@@ -77,12 +77,7 @@ pub fn check_budget(scene: &Scene) -> Result<(), InputError> {
         return Ok(());
     }
     let fits = cap / BYTES_PER_PARTICLE;
-    let ratio = (fits as f64 / particles as f64).sqrt();
     let mib = |b: u64| b as f64 / 1048576.0;
-    let c = Checker {
-        path: &scene.path,
-        src: &scene.source,
-    };
     let mut problem = format!(
         "about {particles} particles need about {:.0} MiB, above the memory cap of {:.0} MiB \
          ([solver] max_memory_mb, default half the machine's memory)",
@@ -99,13 +94,85 @@ pub fn check_budget(scene: &Scene) -> Result<(), InputError> {
             ));
         }
     }
-    Err(match &scene.cloth {
+    Err(too_many(
+        scene,
+        particles,
+        fits,
+        problem,
+        "or raise solver.max_memory_mb",
+    ))
+}
+
+/// Elements per particle in the largest array the GPU path uploads: the hinge incidence list
+/// holds four entries per hinge, and a triangle mesh has at most about three interior edges per
+/// vertex (Euler's formula, E ≈ 3V), so 12 (measured: 11.0 on a 32² grid, 11.7 on the 5 mm
+/// T-shirt).
+pub const GPU_ELEMENTS_PER_PARTICLE: u64 = 12;
+
+/// Refuses, before anything is built, a scene whose arrays would not fit the GPU's largest
+/// texture (`max_texels` elements per array, see `gpu/texels.rs`).
+pub fn check_gpu_textures(scene: &Scene, max_texels: u64) -> Result<(), InputError> {
+    let Some(particles) = estimated_particles(scene)? else {
+        return Ok(());
+    };
+    let fits = max_texels / GPU_ELEMENTS_PER_PARTICLE;
+    if particles <= fits {
+        return Ok(());
+    }
+    let problem = format!(
+        "about {particles} particles need arrays of about {} elements on the GPU, above this \
+         adapter's {max_texels} (its largest 2D texture)",
+        particles.saturating_mul(GPU_ELEMENTS_PER_PARTICLE)
+    );
+    Err(too_many(
+        scene,
+        particles,
+        fits,
+        problem,
+        "or run with --backend cpu",
+    ))
+}
+
+/// The same check on a built model (an OBJ cloth has no estimate): its largest array.
+pub fn check_model_textures(
+    scene: &Scene,
+    model: &super::ClothModel,
+    max_texels: u64,
+) -> Result<(), InputError> {
+    let largest = model.largest_array() as u64;
+    if largest <= max_texels {
+        return Ok(());
+    }
+    let particles = model.len() as u64;
+    let fits = (particles as f64 * max_texels as f64 / largest as f64) as u64;
+    let problem = format!(
+        "the cloth's {particles} particles need an array of {largest} elements on the GPU, \
+         above this adapter's {max_texels} (its largest 2D texture)"
+    );
+    Err(too_many(
+        scene,
+        particles,
+        fits,
+        problem,
+        "or run with --backend cpu",
+    ))
+}
+
+/// Bad input naming the key that sets the particle count, and a value that makes `particles`
+/// come down to `fits`.
+fn too_many(scene: &Scene, particles: u64, fits: u64, problem: String, or: &str) -> InputError {
+    let ratio = (fits as f64 / particles as f64).sqrt();
+    let c = Checker {
+        path: &scene.path,
+        src: &scene.source,
+    };
+    match &scene.cloth {
         ClothSource::Grid { columns, rows, .. } => c.err(
             "cloth.grid",
             "columns",
             problem,
             format!(
-                "use at most about {} × {} particles, or raise solver.max_memory_mb",
+                "use at most about {} × {} particles, {or}",
                 (*columns as f64 * ratio).floor(),
                 (*rows as f64 * ratio).floor()
             ),
@@ -115,10 +182,15 @@ pub fn check_budget(scene: &Scene) -> Result<(), InputError> {
             "particle_distance_m",
             problem,
             format!(
-                "use particle_distance_m = {:.4} or more, or raise solver.max_memory_mb",
+                "use particle_distance_m = {:.4} or more, {or}",
                 options.particle_distance / ratio
             ),
         ),
-        ClothSource::Mesh { .. } => unreachable!("meshes have no estimate"),
-    })
+        ClothSource::Mesh { .. } => c.err(
+            "cloth",
+            "mesh",
+            problem,
+            format!("use a mesh of at most about {fits} vertices, {or}"),
+        ),
+    }
 }

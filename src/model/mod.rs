@@ -160,6 +160,16 @@ impl ClothModel {
         }
     }
 
+    /// Elements in the largest array a backend holds per model: the particles, or an incidence
+    /// list (two entries per spring, four per hinge, three per triangle and per seam pair).
+    pub fn largest_array(&self) -> usize {
+        (self.len())
+            .max(2 * self.springs.len())
+            .max(4 * self.hinges.len())
+            .max(3 * self.triangles.len())
+            .max(3 * self.seams.len())
+    }
+
     /// Number of particles.
     pub fn len(&self) -> usize {
         self.positions.len()
