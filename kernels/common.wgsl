@@ -35,8 +35,8 @@ struct SimParams {
     hash_buckets: u32,           // spatial hash table size
     strain_limit: f32,           // 1, largest edge stretch strain_limit lets through (0.1 = 10%)
     strain_iterations: u32,      // Jacobi iterations of strain_limit per substep
-    _pad3: u32,
-    _pad4: u32,
+    friction_slip_speed: f32,    // m/s, implicit Euler's friction is static (smoothed) below this slip speed
+    tolerance: f32,              // 1, implicit Euler stops sweeping once the largest step falls below tolerance × the first (0: never)
     _pad5: u32,
 }
 
@@ -92,9 +92,12 @@ struct Seam {
 struct Sweep {
     first: u32,
     count: u32,
-    flags: u32,                  // 2: the last iteration (records the residual)
+    iteration: u32,              // 0-based: where the sweep records its largest Newton step
     _pad0: u32,
 }
+
+// Newton steps shorter than this (m) count as converged; as VBD_STEP_FLOOR in layout.rs.
+const VBD_STEP_FLOOR: f32 = 1e-6;
 
 fn unpack_spring(t: vec4<u32>) -> SpringRef {
     return SpringRef(t.x, bitcast<f32>(t.y), bitcast<f32>(t.z), bitcast<f32>(t.w));

@@ -2,9 +2,12 @@
 // vertices of one colour. Each vertex takes one Newton step x += H⁻¹f on the incremental
 // potential ½‖x − y‖²_M / h² + E(x) with its neighbours held fixed; vertices of one colour share
 // no element, so they never read each other's new position. Dispatched once per colour per
-// iteration, the sweep chosen by a dynamic offset. The bending and seam sections are composed in
-// only when the scene has hinges, seams or a body. CPU twin: src/cpu/vbd_solve.rs (energies and
-// Hessians documented there).
+// iteration, the sweep chosen by a dynamic offset. Each sweep records its largest Newton step
+// in its iteration's slot of `steps` (f32 bits: for non-negative floats the u32 order is the
+// float order, so atomicMax works); with a tolerance, a sweep whose substep has converged does
+// nothing (the rule: converged_before in src/solver.rs). The bending and seam sections are
+// composed in only when the scene has hinges, seams or a body. CPU twin: src/cpu/vbd_solve.rs
+// (energies and Hessians documented there).
 
 @group(0) @binding(0) var<uniform> params: SimParams;
 @group(0) @binding(1) var<uniform> step: SubstepParams;          // dynamic offset per substep
@@ -12,13 +15,23 @@
 @group(0) @binding(3) var pos: texture_2d<f32>;                   // xₙ, w = inverse mass
 @group(0) @binding(4) var<storage, read_write> x: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> y: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read_write> residual: array<vec2<f32>>;
+@group(0) @binding(6) var<storage, read_write> steps: array<atomic<u32>>;  // then the iterations run
 @group(0) @binding(7) var order: texture_2d<u32>;                // r32uint: vertices by colour
 @group(0) @binding(8) var spring_offsets: texture_2d<u32>;       // r32uint, N + 1 entries
 @group(0) @binding(9) var springs: texture_2d<u32>;              // one SpringRef per texel
 
-// The weight scale of the residual when gravity is off (a zero-gravity sewing phase), m/s².
-const STANDARD_GRAVITY: f32 = 9.80665;
+var<workgroup> group_step: atomic<u32>;   // the workgroup's largest step, f32 bits
+var<workgroup> group_skip: u32;            // 1: the substep has converged
+
+// Whether iteration k's sweeps are skipped (converged_before in src/solver.rs).
+fn converged_before(k: u32) -> bool {
+    if (k == 0u || params.tolerance <= 0.0) {
+        return false;
+    }
+    let first = bitcast<f32>(atomicLoad(&steps[0]));
+    let last = bitcast<f32>(atomicLoad(&steps[k - 1u]));
+    return last <= max(params.tolerance * first, VBD_STEP_FLOOR);
+}
 
 fn outer(a: vec3<f32>, b: vec3<f32>) -> mat3x3<f32> {
     return mat3x3<f32>(a * b.x, a * b.y, a * b.z);
@@ -142,18 +155,18 @@ fn add_seams(i: u32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>
 // the choices): a penalty ½k_c(thickness − φ)² where φ < thickness with Hessian k_c·n̂n̂ᵀ, k_c
 // CONTACT_RATIO times the mean diagonal of everything else on the vertex; and Coulomb friction
 // lagged on the penalty's normal force λ, opposing the slip u over the step, smoothed below the
-// slip speed FRICTION_SLIP_SPEED: f = −μλ·u / max(|u|, FRICTION_SLIP_SPEED·h).
+// slip speed params.friction_slip_speed: f = −μλ·u / max(|u|, friction_slip_speed·h).
 const CONTACT_RATIO: f32 = 100.0;
-const FRICTION_SLIP_SPEED: f32 = 1.0;
 
-fn add_contact(i: u32, xi: vec3<f32>, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {
+// Returns the body's outward normal (xyz) and signed distance φ (w) at the vertex.
+fn add_contact(i: u32, xi: vec3<f32>, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) -> vec4<f32> {
     let d = xi - step.body_translation.xyz;
     let xb = vec3<f32>(dot(step.body_x.xyz, d), dot(step.body_y.xyz, d), dot(step.body_z.xyz, d));
     let s = sdf_sample(sdf, params.sdf_origin, params.sdf_dims, xb);
-    if (s.w >= params.thickness) {
-        return;
-    }
     let n = safe_normalize(step.body_x.xyz * s.x + step.body_y.xyz * s.y + step.body_z.xyz * s.z);
+    if (s.w >= params.thickness) {
+        return vec4<f32>(n, s.w);
+    }
     let hm = *hs;
     let k_c = CONTACT_RATIO * (hm[0].x + hm[1].y + hm[2].z) / 3.0;
     let lambda = k_c * (params.thickness - s.w);
@@ -163,13 +176,20 @@ fn add_contact(i: u32, xi: vec3<f32>, f: ptr<function, vec3<f32>>, hs: ptr<funct
     let v_body = step.body_velocity.xyz + cross(step.body_angular_velocity.xyz, d);
     let slip = moved(i) - h * v_body;
     let u = slip - dot(slip, n) * n;
-    let scale = params.friction * lambda / max(length(u), FRICTION_SLIP_SPEED * h);
+    let scale = params.friction * lambda / max(length(u), params.friction_slip_speed * h);
     *f = *f - scale * u;
     *hs = *hs + scale * (diagonal(1.0) - outer(n, n));
+    return vec4<f32>(n, s.w);
 }
 // else body
-fn add_contact(i: u32, xi: vec3<f32>, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {}
+fn add_contact(i: u32, xi: vec3<f32>, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) -> vec4<f32> {
+    return vec4<f32>(0.0, 0.0, 0.0, 3.4e38);
+}
 // end body
+
+// How far inside the contact layer, as a fraction of the thickness, a vertex that reaches it
+// from outside stops (why: newton_step in the CPU twin).
+const CONTACT_ENTRY: f32 = 1e-2;
 
 // H⁻¹f through the adjugate: its rows are cross products of H's columns.
 fn solve3(hs: mat3x3<f32>, f: vec3<f32>) -> vec3<f32> {
@@ -183,16 +203,11 @@ fn solve3(hs: mat3x3<f32>, f: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(dot(r0, f), dot(r1, f), dot(r2, f)) / det;
 }
 
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let k = particle_index(gid, groups);
-    if (k >= sweep.count) {
-        return;
-    }
-    let i = textureLoad(order, texel(sweep.first + k), 0).x;
+// One vertex's Newton step; returns its length (0 for a pinned vertex).
+fn newton_step(i: u32) -> f32 {
     let prev = textureLoad(pos, texel(i), 0);
     if (prev.w == 0.0) {
-        return;
+        return 0.0;
     }
     let h = params.dt;
     let mass = 1.0 / prev.w;
@@ -204,12 +219,46 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     add_springs(i, xi, &f, &hs);
     add_bending(i, &f, &hs);
     add_seams(i, &f, &hs);
-    add_contact(i, xi, &f, &hs);
-    if ((sweep.flags & 2u) != 0u) {
-        // The last sweep records the unbalanced force against the vertex's weight.
-        let g = length(params.gravity.xyz);
-        let weight = mass * select(STANDARD_GRAVITY, g, g > 0.0);
-        residual[i] = vec2<f32>(weight * weight, dot(f, f));
+    let surface = add_contact(i, xi, &f, &hs);
+    var delta = solve3(hs, f);
+    if (surface.w >= params.thickness) {
+        // A step that would enter the contact layer from outside stops just inside it.
+        let entry = params.thickness * (1.0 - CONTACT_ENTRY);
+        let landing = surface.w + dot(surface.xyz, delta);
+        if (landing < entry) {
+            delta = delta + (entry - landing) * surface.xyz;
+        }
     }
-    x[i] = vec4<f32>(xi + solve3(hs, f), prev.w);
+    x[i] = vec4<f32>(xi + delta, prev.w);
+    return length(delta);
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn main(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    if (lid == 0u) {
+        group_skip = select(0u, 1u, converged_before(sweep.iteration));
+        atomicStore(&group_step, 0u);
+    }
+    // Every invocation sees the same decision (and the cleared maximum) after this barrier.
+    if (workgroupUniformLoad(&group_skip) != 0u) {
+        return;
+    }
+    let k = particle_index(gid, groups);
+    var len = 0.0;
+    if (k < sweep.count) {
+        len = newton_step(textureLoad(order, texel(sweep.first + k), 0).x);
+    }
+    atomicMax(&group_step, bitcast<u32>(len));
+    workgroupBarrier();
+    if (lid == 0u) {
+        atomicMax(&steps[sweep.iteration], atomicLoad(&group_step));
+        // An iteration counts once, by the first workgroup of its first colour.
+        if (sweep.first == 0u && all(gid == vec3<u32>(0u))) {
+            atomicAdd(&steps[params.iterations], 1u);
+        }
+    }
 }

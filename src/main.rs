@@ -220,6 +220,13 @@ fn parse_strain_max(s: &str) -> Result<f32, String> {
 }
 
 fn main() -> ExitCode {
+    #[cfg(unix)]
+    // SAFETY: restoring the default action of a signal, before any thread starts. Rust ignores
+    // SIGPIPE, which turns `drapekit … | head` into a panic at the first println after the
+    // reader left; the default ends the process quietly, as other command-line tools do.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         // Mesa's Vulkan loader prints a harmless error per adapter without it; set before any
         // thread starts.

@@ -43,12 +43,18 @@ pub struct Summary {
     pub dt: f32,
     /// "explicit", "symplectic" or "implicit".
     pub integrator: &'static str,
-    /// Vertex Block Descent sweeps per substep (implicit only).
+    /// Vertex Block Descent sweeps per substep, the most with a tolerance (implicit only).
     pub iterations: Option<u32>,
+    /// `[solver] tolerance`, if any (implicit only).
+    pub tolerance: Option<f32>,
+    /// Sweeps the solve ran per substep, on average (implicit only): `iterations` without a
+    /// tolerance, fewer with one.
+    pub iterations_mean: Option<f64>,
     /// Vertex colours, i.e. dispatches per sweep (implicit only).
     pub colors: Option<usize>,
-    /// Largest relative residual, the unbalanced force entering the last sweep over the cloth's
-    /// weight ‖f‖/‖m·g‖, over the last substep of every output frame (implicit only).
+    /// Largest relative residual over the last substep of every output frame (implicit only):
+    /// the largest Newton step of the last sweep over that of the first sweep (steps under
+    /// 1 µm count as 1 µm), i.e. how much of the step's correction the sweeps left undone.
     pub max_residual: Option<f32>,
     /// Simulated time in s.
     pub simulated_seconds: f64,

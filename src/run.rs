@@ -371,6 +371,10 @@ fn run_scene_from(
             _ => "symplectic",
         },
         iterations: prep.colors.map(|_| prep.params.iterations),
+        tolerance: prep.colors.and(scene.solver.tolerance),
+        iterations_mean: prep.colors.map(|_| {
+            stats.iterations_run as f64 / (stats.frames_run as f64 * prep.substeps as f64).max(1.0)
+        }),
         colors: prep.colors,
         max_residual: stats.max_residual,
         simulated_seconds: substeps_run * prep.params.dt as f64,

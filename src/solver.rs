@@ -2,7 +2,8 @@
 
 use crate::error::Error;
 use crate::model::layout::SubstepParams;
-use glam::{Vec2, Vec4};
+use crate::model::layout::VBD_STEP_FLOOR;
+use glam::Vec4;
 use serde::Serialize;
 
 /// Particle positions (w = inverse mass) and velocities, as read back at an output frame.
@@ -44,9 +45,9 @@ pub trait Solver {
     /// The current state's health (the `monitor` stage): kinetic energy, largest speed and
     /// strain, non-finite particles. Reads back 32 bytes per 64 particles.
     fn health(&mut self) -> Result<Health, Error>;
-    /// Implicit Euler's relative residual in the last substep: the unbalanced force entering
-    /// the last sweep over the cloth's weight (`None` for the explicit integrators).
-    fn residual(&mut self) -> Result<Option<f32>, Error> {
+    /// What implicit Euler's solve did: its relative residual in the last substep, and the
+    /// iterations it ran since the last call (`None` for the explicit integrators).
+    fn residual(&mut self) -> Result<Option<SolveProgress>, Error> {
         Ok(None)
     }
     /// Waits until submitted work has finished, without reading anything back (for timing).
@@ -55,17 +56,36 @@ pub trait Solver {
     }
 }
 
-/// The relative residual of an implicit step from per-vertex (m²g², |f|²) pairs: the unbalanced
-/// force entering the last sweep over the cloth's weight, ‖f‖/‖m·g‖ (0 without free vertices).
-pub fn relative_residual(residual: &[Vec2]) -> f32 {
-    let (weight, force) = residual.iter().fold((0.0f64, 0.0f64), |(w, f), r| {
-        (w + r.x as f64, f + r.y as f64)
-    });
-    if weight > 0.0 {
-        (force / weight).sqrt() as f32
-    } else {
-        0.0
+/// What implicit Euler's solve did, as `Solver::residual` reports it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolveProgress {
+    /// The last substep's relative residual (see `relative_residual`).
+    pub relative_residual: f32,
+    /// Iterations (sweeps over every colour) run since the previous report.
+    pub iterations: u64,
+}
+
+/// Whether implicit Euler skips iteration `k` of a substep, given the largest Newton step of
+/// each earlier iteration (`steps`, m): with a tolerance, once an iteration's largest step is
+/// within `tolerance` of the first iteration's, or under `VBD_STEP_FLOOR`. The kernels and the
+/// CPU twin apply the same rule before each sweep.
+pub fn converged_before(steps: &[f32], k: usize, tolerance: f32) -> bool {
+    k >= 1 && tolerance > 0.0 && steps[k - 1] <= (tolerance * steps[0]).max(VBD_STEP_FLOOR)
+}
+
+/// The relative residual of a substep from the largest Newton step of each iteration: that of
+/// the last iteration run over that of the first (a step under `VBD_STEP_FLOOR` counts as the
+/// floor, so a cloth at rest reads ≈ 0, not 0/0). The Newton step is the residual force
+/// preconditioned by each vertex's Hessian, so it is in metres whatever the stiffness: the
+/// force itself is dominated by stiff contact, which a sweep corrects by micrometres.
+pub fn relative_residual(steps: &[f32], tolerance: f32) -> f32 {
+    let run = (1..steps.len())
+        .find(|&k| converged_before(steps, k, tolerance))
+        .unwrap_or(steps.len());
+    if run == 0 {
+        return 0.0;
     }
+    steps[run - 1] / steps[0].max(VBD_STEP_FLOOR)
 }
 
 /// One workgroup's (or block's) share of a frame's health.

@@ -427,8 +427,8 @@ fn plan_names_what_limits_the_substep() {
 
 #[test]
 fn tshirt_drape_cotton_sews_rests_and_stays_out_of_the_body() {
-    // Woven cotton at its measured stiffness, implicit Euler at one step per frame, run whole
-    // on the CPU path (about 2 s): sewn, then gravity, then the settle rule stops it.
+    // Woven cotton at its measured stiffness, implicit Euler at 8 steps of 3 sweeps per frame,
+    // run whole on the CPU path (about 4 s): sewn, then gravity, then the settle rule stops it.
     let out = out_dir("tshirt_drape_cotton");
     let r = drapekit(&[
         "run",
@@ -449,9 +449,10 @@ fn tshirt_drape_cotton_sews_rests_and_stays_out_of_the_body() {
     assert_eq!(summary["seams_closed"], summary["seams"], "{summary:#}");
     // The collision thickness is 3 mm; particles are measured against the exact mesh.
     assert!(f("max_penetration_m") <= 0.003, "{summary:#}");
-    // At rest the largest stretch is 10% (one edge at the armpit; 99% of edges are under 5%,
-    // see README "Implicit Euler"): 15% flags a regression. The 5% target is not met yet.
-    assert!(f("last_frame_max_edge_strain") <= 0.15, "{summary:#}");
+    // Woven cotton stretches a few percent in wear (README, "Fabric presets"): at rest no edge
+    // may be stretched past 5%. The CPU path gives the same bits on every machine and thread
+    // count, so this is 4.07% wherever it runs; the strain limit (10%) is not what holds it.
+    assert!(f("last_frame_max_edge_strain") <= 0.05, "{summary:#}");
     for name in ["preview_fabric.png", "preview_strain.png"] {
         let path = out.join(name);
         if common::gpu().is_some() {
@@ -472,4 +473,20 @@ fn every_subcommand_help_shows_an_example() {
             "{sub} --help has no example:\n{text}"
         );
     }
+}
+
+#[test]
+fn a_closed_stdout_ends_the_command_quietly() {
+    // `drapekit info | head -0`: the reader is gone before drapekit prints. Rust ignores
+    // SIGPIPE and would panic at the first println; drapekit restores the default action.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .arg("info")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
 }

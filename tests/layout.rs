@@ -60,8 +60,11 @@ fn sim_params_layout() {
                 "strain_iterations",
                 offset_of!(SimParams, strain_iterations),
             ),
-            ("_pad3", offset_of!(SimParams, _pad3)),
-            ("_pad4", offset_of!(SimParams, _pad4)),
+            (
+                "friction_slip_speed",
+                offset_of!(SimParams, friction_slip_speed),
+            ),
+            ("tolerance", offset_of!(SimParams, tolerance)),
             ("_pad5", offset_of!(SimParams, _pad5)),
         ],
     );
@@ -146,25 +149,31 @@ fn sweep_layout() {
         &[
             ("first", offset_of!(Sweep, first)),
             ("count", offset_of!(Sweep, count)),
-            ("flags", offset_of!(Sweep, flags)),
+            ("iteration", offset_of!(Sweep, iteration)),
             ("_pad0", offset_of!(Sweep, _pad0)),
         ],
     );
 }
 
-/// A `u32` constant of common.wgsl, as naga evaluates it.
-fn wgsl_const(name: &str) -> u32 {
+/// A constant of common.wgsl, as naga evaluates it.
+fn wgsl_literal(name: &str) -> naga::Literal {
     let module = validate_wgsl("common.wgsl", COMMON_WGSL).expect("common.wgsl validates");
     for (_, c) in module.constants.iter() {
         if c.name.as_deref() == Some(name) {
-            if let naga::Expression::Literal(naga::Literal::U32(v)) =
-                module.global_expressions[c.init]
-            {
+            if let naga::Expression::Literal(v) = module.global_expressions[c.init] {
                 return v;
             }
         }
     }
-    panic!("u32 constant {name} not found in common.wgsl");
+    panic!("constant {name} not found in common.wgsl");
+}
+
+/// A `u32` constant of common.wgsl.
+fn wgsl_const(name: &str) -> u32 {
+    match wgsl_literal(name) {
+        naga::Literal::U32(v) => v,
+        other => panic!("{name} is {other:?}, not a u32"),
+    }
 }
 
 #[test]
@@ -172,6 +181,10 @@ fn shared_constants_match() {
     use drapekit::model::layout::{TEXELS_PER_ROW, WORKGROUP_SIZE};
     assert_eq!(wgsl_const("TEXELS_PER_ROW"), TEXELS_PER_ROW);
     assert_eq!(wgsl_const("WORKGROUP_SIZE"), WORKGROUP_SIZE);
+    assert_eq!(
+        wgsl_literal("VBD_STEP_FLOOR"),
+        naga::Literal::F32(drapekit::model::layout::VBD_STEP_FLOOR)
+    );
     // Texture rows are copied to and from buffers, which needs 256-byte aligned rows.
     assert_eq!((TEXELS_PER_ROW * 4) % 256, 0, "r32uint rows");
 }

@@ -38,15 +38,15 @@ pub use spring_forces::spring_forces;
 pub use strain_limit::strain_limit;
 pub use vbd_finish::vbd_finish;
 pub use vbd_init::vbd_init;
-pub use vbd_solve::{solve3, vbd_solve, vertex_system, VbdElements};
+pub use vbd_solve::{newton_step, solve3, vbd_solve, vertex_system, VbdElements};
 pub use wind_forces::wind_forces;
 
 use crate::error::Error;
 use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep};
 use crate::model::{ClothModel, Csr};
 use crate::plan::{Pass, PassPlan};
-use crate::solver::{relative_residual, AdapterReport, ParticleState, Solver};
-use glam::{Vec2, Vec4};
+use crate::solver::{relative_residual, AdapterReport, ParticleState, SolveProgress, Solver};
+use glam::Vec4;
 use rayon::prelude::*;
 
 /// The CPU backend. Holds data only for the stages in its plan.
@@ -93,8 +93,10 @@ pub struct Vbd {
     pub x: Vec<Vec4>,
     /// The inertial target.
     pub y: Vec<Vec4>,
-    /// |f|² per vertex before its first (x) and last (y) Newton step of the last substep.
-    pub residual: Vec<Vec2>,
+    /// The largest Newton step of each iteration of the last substep, in m.
+    pub steps: Vec<f32>,
+    /// Iterations run, in all; and as many as were last reported.
+    iterations_run: (u64, u64),
 }
 
 /// The self-collision hash table and the mesh neighbours it skips.
@@ -177,7 +179,8 @@ impl CpuSolver {
                     order: coloring.order,
                     x: vec![Vec4::ZERO; n],
                     y: vec![Vec4::ZERO; n],
-                    residual: vec![Vec2::ZERO; n],
+                    steps: vec![0.0; params.iterations as usize],
+                    iterations_run: (0, 0),
                 }
             }),
         }
@@ -302,7 +305,8 @@ impl CpuSolver {
             }
             Pass::VbdInit => {
                 let v = self.vbd.as_mut().expect("vbd_init is not in the plan");
-                vbd_init(p, &self.pos, &self.vel, &mut self.force, &mut v.x, &mut v.y);
+                let (x, y, steps) = (&mut v.x, &mut v.y, &mut v.steps);
+                vbd_init(p, &self.pos, &self.vel, &mut self.force, x, y, steps);
             }
             Pass::VbdSolve => {
                 let v = self.vbd.as_mut().expect("vbd_solve is not in the plan");
@@ -319,7 +323,7 @@ impl CpuSolver {
                     sdf: self.collider.as_ref().map(|c| &c.sdf.values[..]),
                 };
                 for sweep in &v.sweeps {
-                    vbd_solve(
+                    let ran = vbd_solve(
                         p,
                         step,
                         sweep,
@@ -327,9 +331,11 @@ impl CpuSolver {
                         &self.pos,
                         &v.y,
                         &mut v.x,
-                        &mut v.residual,
+                        &mut v.steps,
                         &el,
                     );
+                    // An iteration counts once, at its first colour.
+                    v.iterations_run.0 += (ran && sweep.first == 0) as u64;
                 }
             }
             Pass::VbdFinish => {
@@ -434,8 +440,16 @@ impl Solver for CpuSolver {
         ))
     }
 
-    fn residual(&mut self) -> Result<Option<f32>, Error> {
-        Ok(self.vbd.as_ref().map(|v| relative_residual(&v.residual)))
+    fn residual(&mut self) -> Result<Option<SolveProgress>, Error> {
+        let tolerance = self.params.tolerance;
+        Ok(self.vbd.as_mut().map(|v| {
+            let (run, reported) = v.iterations_run;
+            v.iterations_run.1 = run;
+            SolveProgress {
+                relative_residual: relative_residual(&v.steps, tolerance),
+                iterations: run - reported,
+            }
+        }))
     }
 
     /// Replaces positions and velocities and clears forces.

@@ -10,8 +10,9 @@ use rayon::prelude::*;
 /// carry the whole weight of a hanging cloth back up, which they do too slowly: the cloth
 /// stretches. Vertex Block Descent's adaptive guess, which adds the part of the last step's
 /// acceleration along a, let a stiff hanging cloth gain energy between frames in our tests.)
-/// Pinned particles stay where they are. Clears the force accumulator, as `integrate` does.
-/// Particles are independent and run in parallel.
+/// Pinned particles stay where they are. Clears the force accumulator, as `integrate` does,
+/// and the largest Newton step of every iteration (`steps`). Particles are independent and run
+/// in parallel.
 pub fn vbd_init(
     params: &SimParams,
     pos: &[Vec4],
@@ -19,7 +20,9 @@ pub fn vbd_init(
     force: &mut [Vec4],
     x: &mut [Vec4],
     y: &mut [Vec4],
+    steps: &mut [f32],
 ) {
+    steps.fill(0.0);
     let h = params.dt;
     let gravity = Vec4::from(params.gravity).truncate();
     let n = params.num_particles as usize;

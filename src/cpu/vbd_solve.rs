@@ -9,8 +9,9 @@
 use super::bending_forces::hinge_geometry;
 use super::collide_body::{body_velocity_at, sample_body_sdf, to_body_frame, to_world};
 use super::seam_forces::rest_gap;
-use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep, SWEEP_LAST};
-use glam::{Mat3, Vec2, Vec3, Vec4};
+use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep};
+use crate::solver::converged_before;
+use glam::{Mat3, Vec3, Vec4};
 use rayon::prelude::*;
 
 /// The elements a vertex gathers over, as CSR lists (the same arrays the force stages use).
@@ -28,12 +29,6 @@ pub struct VbdElements<'a> {
 /// Contact is this many times stiffer than the mean diagonal of everything else acting on the
 /// vertex, whatever the fabric and step.
 pub const CONTACT_RATIO: f32 = 100.0;
-
-/// Friction reaches its Coulomb bound μλ at this slip speed relative to the body, in m/s;
-/// below it friction grows in proportion to the slip (the smoothing of IPC's friction). At
-/// 0.01 m/s the cotton T-shirt's seams could not close against it while it was sewn on the
-/// body (4 of 12); at 1 m/s all close and the shirt still hangs where it is sewn.
-pub const FRICTION_SLIP_SPEED: f32 = 1.0;
 
 fn outer(a: Vec3, b: Vec3) -> Mat3 {
     Mat3::from_cols(a * b.x, a * b.y, a * b.z)
@@ -62,7 +57,7 @@ fn spring_hessian(k: f32, rest: f32, d: Vec3, len: f32) -> Mat3 {
 /// - body contact, at the body's pose at the end of the step: a penalty ½k_c(thickness − φ)²
 ///   where φ < thickness, Hessian k_c·n̂n̂ᵀ, k_c = `CONTACT_RATIO` × the mean diagonal of the
 ///   rest; and Coulomb friction lagged on the penalty's normal force λ = k_c(thickness − φ):
-///   −μλ·u/max(|u|, `FRICTION_SLIP_SPEED`·h) on the slip u (the tangential displacement over the
+///   −μλ·u/max(|u|, ε_v·h) on the slip u (the tangential displacement over the
 ///   step relative to the body), Hessian μλ/max(…)·(I − n̂n̂ᵀ). Without friction here (contact
 ///   resolved in the solve leaves `collide_body` nothing to do), draped cloth slid up the body.
 #[allow(clippy::too_many_arguments)] // the kernel's inputs, one argument each
@@ -74,7 +69,7 @@ pub fn vertex_system(
     prev: &[Vec4],
     y: &[Vec4],
     el: &VbdElements,
-) -> (Vec3, Mat3) {
+) -> (Vec3, Mat3, Option<(f32, Vec3)>) {
     let h = params.dt;
     let inv_mass = prev[i].w;
     let mass = 1.0 / inv_mass;
@@ -145,13 +140,15 @@ pub fn vertex_system(
         }
     }
 
+    let mut surface = None;
     if let Some(sdf) = el.sdf {
         let (xb, d) = to_body_frame(step, xi);
         let s = sample_body_sdf(params, sdf, xb);
+        let g = to_world(step, s.truncate());
+        let len = g.length();
+        let n = if len > 1e-12 { g / len } else { Vec3::ZERO };
+        surface = Some((s.w, n));
         if s.w < params.thickness {
-            let g = to_world(step, s.truncate());
-            let len = g.length();
-            let n = if len > 1e-12 { g / len } else { Vec3::ZERO };
             let k_c = CONTACT_RATIO * (hess.x_axis.x + hess.y_axis.y + hess.z_axis.z) / 3.0;
             let lambda = k_c * (params.thickness - s.w);
             f += lambda * n;
@@ -159,12 +156,38 @@ pub fn vertex_system(
             let v_body = body_velocity_at(step, d);
             let slip = moved(i) - h * v_body;
             let u = slip - slip.dot(n) * n;
-            let scale = params.friction * lambda / u.length().max(FRICTION_SLIP_SPEED * h);
+            let scale = params.friction * lambda / u.length().max(params.friction_slip_speed * h);
             f -= scale * u;
             hess += scale * (Mat3::IDENTITY - outer(n, n));
         }
     }
-    (f, hess)
+    (f, hess, surface)
+}
+
+/// How far inside the contact layer, as a fraction of the thickness, a vertex that reaches it
+/// from outside stops (`newton_step`).
+pub const CONTACT_ENTRY: f32 = 1e-2;
+
+/// The vertex's Newton step H⁻¹f, stopped where it would enter the body's contact layer from
+/// outside: at `CONTACT_ENTRY` of the thickness inside it (φ linearised along the step).
+/// Outside the layer the contact has no force and no stiffness, so an unstopped step lands as
+/// deep as the pull takes it (millimetres); the next sweep's stiff penalty throws it back out,
+/// and a resting vertex alternated between the two on every sweep (the largest step of every
+/// sweep stayed at ~2 mm). Stopped just inside, the next sweep sees the contact and settles it.
+pub fn newton_step(params: &SimParams, f: Vec3, hess: Mat3, surface: Option<(f32, Vec3)>) -> Vec3 {
+    let delta = solve3(hess, f);
+    match surface {
+        Some((phi, n)) if phi >= params.thickness => {
+            let entry = params.thickness * (1.0 - CONTACT_ENTRY);
+            let landing = phi + n.dot(delta);
+            if landing < entry {
+                delta + (entry - landing) * n
+            } else {
+                delta
+            }
+        }
+        _ => delta,
+    }
 }
 
 /// H⁻¹f through the adjugate (as the kernel, which has no matrix inverse); zero when H is
@@ -182,16 +205,13 @@ pub fn solve3(hess: Mat3, f: Vec3) -> Vec3 {
     Vec3::new(r0.dot(f), r1.dot(f), r2.dot(f)) / det
 }
 
-/// The weight scale of the residual when gravity is off (a zero-gravity sewing phase), m/s².
-pub const STANDARD_GRAVITY: f32 = 9.80665;
-
-/// One sweep: every free vertex of the colour takes its Newton step, in place. The last
-/// iteration records, before the step, the vertex's squared weight m²g² (x) and squared
-/// unbalanced force |f|² (y) in `residual`.
+/// One sweep: every free vertex of the colour takes its Newton step, in place, and the
+/// sweep's iteration records the largest step length in `steps` (m). Skipped (returning
+/// false) once the tolerance says the substep has converged (`converged_before`).
 ///
 /// A vertex's system reads only itself and vertices of other colours, so the colour's steps
 /// are computed in parallel from the same `x` and then written: the same numbers as one
-/// vertex after another, on any number of threads.
+/// vertex after another, on any number of threads (the largest of them too).
 #[allow(clippy::too_many_arguments)] // the kernel's bindings, one argument each
 pub fn vbd_solve(
     params: &SimParams,
@@ -201,33 +221,31 @@ pub fn vbd_solve(
     prev: &[Vec4],
     y: &[Vec4],
     x: &mut [Vec4],
-    residual: &mut [Vec2],
+    steps: &mut [f32],
     el: &VbdElements,
-) {
+) -> bool {
+    let iteration = sweep.iteration as usize;
+    if converged_before(steps, iteration, params.tolerance) {
+        return false;
+    }
     let colour = &order[sweep.first as usize..(sweep.first + sweep.count) as usize];
     let x_now: &[Vec4] = x;
-    let updates: Vec<(usize, Vec4, Option<Vec2>)> = colour
+    let updates: Vec<(usize, Vec4, f32)> = colour
         .par_iter()
         .filter_map(|&i| {
             let i = i as usize;
             if prev[i].w == 0.0 {
                 return None;
             }
-            let (f, hess) = vertex_system(params, step, i, x_now, prev, y, el);
-            // The last sweep records the unbalanced force against the vertex's weight.
-            let r = (sweep.flags & SWEEP_LAST != 0).then(|| {
-                let g = Vec4::from(params.gravity).truncate().length();
-                let weight = (1.0 / prev[i].w) * if g > 0.0 { g } else { STANDARD_GRAVITY };
-                Vec2::new(weight * weight, f.dot(f))
-            });
-            let next = (x_now[i].truncate() + solve3(hess, f)).extend(prev[i].w);
-            Some((i, next, r))
+            let (f, hess, surface) = vertex_system(params, step, i, x_now, prev, y, el);
+            let delta = newton_step(params, f, hess, surface);
+            let next = (x_now[i].truncate() + delta).extend(prev[i].w);
+            Some((i, next, delta.length()))
         })
         .collect();
-    for (i, next, r) in updates {
+    for (i, next, len) in updates {
         x[i] = next;
-        if let Some(r) = r {
-            residual[i] = r;
-        }
+        steps[iteration] = steps[iteration].max(len);
     }
+    true
 }

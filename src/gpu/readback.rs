@@ -36,15 +36,6 @@ impl GpuSolver {
         }
     }
 
-    /// A storage buffer's f32 words (the implicit solve's residual pairs).
-    pub(super) fn read_f32(&self, buffer: &wgpu::Buffer) -> Result<Vec<f32>, Error> {
-        Ok(self
-            .read_u32(buffer)?
-            .into_iter()
-            .map(f32::from_bits)
-            .collect())
-    }
-
     pub(super) fn read_u32(&self, buffer: &wgpu::Buffer) -> Result<Vec<u32>, Error> {
         let size = buffer.size();
         let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {

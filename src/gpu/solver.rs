@@ -34,12 +34,15 @@ pub(super) struct SubstepBuffer {
     pub(super) capacity: usize,
 }
 
-/// Implicit Euler's buffers: the iterate, the inertial target, the residual pairs, and the
-/// sweep table (one `Sweep` per dispatch at a uniform-offset stride).
+/// Implicit Euler's buffers: the iterate, the inertial target, the largest Newton step of each
+/// iteration (then the count of iterations run), and the sweep table (one `Sweep` per dispatch
+/// at a uniform-offset stride).
 pub(super) struct VbdBuffers {
     pub(super) x: wgpu::Buffer,
     pub(super) y: wgpu::Buffer,
-    pub(super) residual: wgpu::Buffer,
+    pub(super) steps: wgpu::Buffer,
+    /// The count of iterations run when last reported (it wraps at 2³²).
+    pub(super) iterations_reported: u32,
     pub(super) sweep_buffer: wgpu::Buffer,
     pub(super) sweep_stride: u64,
     pub(super) sweeps: Vec<Sweep>,
@@ -50,6 +53,8 @@ pub(super) struct VbdBuffers {
 pub struct GpuSolver {
     pub(super) ctx: GpuContext,
     pub(super) params: wgpu::Buffer,
+    /// `SimParams::tolerance` as last set (the host's copy, for the residual).
+    pub(super) tolerance: f32,
     pub(super) pos: [TexelArray; 2],
     pub(super) vel: [TexelArray; 2],
     pub(super) forces: Vec<TexelArray>,
@@ -175,7 +180,7 @@ impl GpuSolver {
             };
             let x = storage("vbd_x", 16 * n as u64);
             let y = storage("vbd_y", 16 * n as u64);
-            let residual = storage("vbd_residual", 8 * n as u64);
+            let steps = storage("vbd_steps", 4 * (params.iterations as u64 + 1));
 
             labels.push("vbd_sweeps");
             let align = ctx.device.limits().min_uniform_buffer_offset_alignment as u64;
@@ -195,7 +200,8 @@ impl GpuSolver {
             VbdBuffers {
                 x,
                 y,
-                residual,
+                steps,
+                iterations_reported: 0,
                 sweep_buffer,
                 sweep_stride: stride,
                 sweeps,
@@ -349,6 +355,7 @@ impl GpuSolver {
                         Binding::Read(&vel[p]),
                         Binding::Storage(&vb().x, false),
                         Binding::Storage(&vb().y, false),
+                        Binding::Storage(&vb().steps, false),
                     ],
                     Pass::VbdSolve => {
                         let mut list = vec![
@@ -358,7 +365,7 @@ impl GpuSolver {
                             Binding::Read(&pos[p]),
                             Binding::Storage(&vb().x, false),
                             Binding::Storage(&vb().y, true),
-                            Binding::Storage(&vb().residual, false),
+                            Binding::Storage(&vb().steps, false),
                             o(0),
                             o(1),
                             o(2),
@@ -446,6 +453,7 @@ impl GpuSolver {
         Ok(GpuSolver {
             ctx: ctx.clone(),
             params: params_buf,
+            tolerance: params.tolerance,
             pos,
             vel,
             forces,
@@ -514,22 +522,24 @@ impl Solver for GpuSolver {
         Ok(crate::solver::Health::from_partials(&partials))
     }
 
-    fn residual(&mut self) -> Result<Option<f32>, Error> {
-        match &self.vbd {
-            Some(v) => {
-                let pairs: Vec<glam::Vec2> = self
-                    .read_f32(&v.residual)?
-                    .chunks_exact(2)
-                    .take(self.n)
-                    .map(|c| glam::Vec2::new(c[0], c[1]))
-                    .collect();
-                Ok(Some(crate::solver::relative_residual(&pairs)))
-            }
-            None => Ok(None),
-        }
+    fn residual(&mut self) -> Result<Option<crate::solver::SolveProgress>, Error> {
+        let Some(v) = &self.vbd else {
+            return Ok(None);
+        };
+        let words = self.read_u32(&v.steps)?;
+        let (steps, count) = words.split_at(words.len() - 1);
+        let steps: Vec<f32> = steps.iter().map(|&w| f32::from_bits(w)).collect();
+        let v = self.vbd.as_mut().expect("checked above");
+        let iterations = count[0].wrapping_sub(v.iterations_reported);
+        v.iterations_reported = count[0];
+        Ok(Some(crate::solver::SolveProgress {
+            relative_residual: crate::solver::relative_residual(&steps, self.tolerance),
+            iterations: iterations as u64,
+        }))
     }
 
     fn set_params(&mut self, params: &SimParams) {
+        self.tolerance = params.tolerance;
         self.ctx
             .queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(params));

@@ -2,7 +2,7 @@
 //! hinge or a seam pair get the same colour, so all vertices of one colour can take their
 //! Newton step at once without reading each other's new positions.
 
-use super::layout::{Sweep, SWEEP_LAST};
+use super::layout::Sweep;
 use super::ClothModel;
 
 /// Vertices grouped by colour: `order[offsets[c]..offsets[c + 1]]` are the vertices of colour
@@ -28,11 +28,10 @@ impl Coloring {
         let mut out = Vec::new();
         for it in 0..iterations {
             for c in 0..self.colors() {
-                let flags = if it + 1 == iterations { SWEEP_LAST } else { 0 };
                 out.push(Sweep {
                     first: self.offsets[c],
                     count: self.offsets[c + 1] - self.offsets[c],
-                    flags,
+                    iteration: it,
                     _pad0: 0,
                 });
             }

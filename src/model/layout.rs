@@ -47,10 +47,12 @@ pub struct SimParams {
     pub strain_limit: f32,
     /// Jacobi iterations of `strain_limit` per substep (0 when the stage is off).
     pub strain_iterations: u32,
-    /// Padding.
-    pub _pad3: u32,
-    /// Padding.
-    pub _pad4: u32,
+    /// Implicit Euler's friction: slip speed relative to the body below which friction grows in
+    /// proportion to the slip (static friction, smoothed), in m/s.
+    pub friction_slip_speed: f32,
+    /// Implicit Euler stops sweeping once an iteration's largest Newton step falls below this
+    /// fraction of the first iteration's (or below `VBD_STEP_FLOOR`); 0: always `iterations`.
+    pub tolerance: f32,
     /// Padding.
     pub _pad5: u32,
 }
@@ -139,14 +141,15 @@ pub struct Sweep {
     pub first: u32,
     /// Vertices of the colour.
     pub count: u32,
-    /// `SWEEP_LAST` in the last iteration, which records the residual.
-    pub flags: u32,
+    /// The iteration the sweep belongs to (0-based): where it records its largest step.
+    pub iteration: u32,
     /// Padding to 16 bytes.
     pub _pad0: u32,
 }
 
-/// `Sweep::flags` bit of the last iteration.
-pub const SWEEP_LAST: u32 = 2;
+/// Newton steps shorter than this, in m, count as converged: a 2 m coordinate's f32 rounding
+/// is 1.2e-7 m, so an iterate cannot settle much closer than that.
+pub const VBD_STEP_FLOOR: f32 = 1e-6;
 
 /// Integrator codes shared with `integrate.wgsl`.
 pub use crate::scene::{INTEGRATOR_EXPLICIT, INTEGRATOR_IMPLICIT, INTEGRATOR_SYMPLECTIC};

@@ -33,6 +33,8 @@ pub(super) struct RawBody {
     thickness_m: f64,
     #[serde(default = "default_friction")]
     friction: f64,
+    #[serde(default = "default_friction_slip_speed")]
+    friction_slip_speed_m_s: f64,
     #[serde(default)]
     normal_loss: f64,
     #[serde(default)]
@@ -76,6 +78,11 @@ fn default_thickness() -> f64 {
 }
 fn default_friction() -> f64 {
     0.3
+}
+/// Implicit Euler's friction holds (creeps at most this speed times the ratio of the pull to
+/// the Coulomb bound) below 1 cm/s of slip.
+fn default_friction_slip_speed() -> f64 {
+    0.01
 }
 fn default_strategy() -> String {
     "sdf".into()
@@ -146,6 +153,9 @@ pub struct BodySettings {
     pub thickness: f32,
     /// Coulomb coefficient.
     pub friction: f32,
+    /// Implicit Euler's friction: the slip speed relative to the body below which friction
+    /// grows in proportion to the slip (smoothed static friction), in m/s.
+    pub friction_slip_speed: f32,
     /// Fraction of outward normal relative speed lost in contact.
     pub normal_loss: f32,
     /// Fraction of tangential relative speed lost in contact.
@@ -322,6 +332,13 @@ pub(super) fn parse(c: &Checker, base: &Path, b: &RawBody) -> Result<BodySetting
         sdf_cache: b.sdf_cache,
         thickness,
         friction: c.non_negative(t, "friction", b.friction, "1")?,
+        friction_slip_speed: c.within(
+            t,
+            "friction_slip_speed_m_s",
+            b.friction_slip_speed_m_s,
+            (1e-4, 10.0),
+            "m/s",
+        )?,
         normal_loss: fraction("normal_loss", b.normal_loss)?,
         tangential_loss: fraction("tangential_loss", b.tangential_loss)?,
         strategy,

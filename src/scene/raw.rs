@@ -195,6 +195,7 @@ pub(super) struct RawSolver {
     pub(super) integrator: String,
     #[serde(default = "default_iterations")]
     pub(super) iterations: i64,
+    pub(super) tolerance: Option<f64>,
     pub(super) settle_ke_per_particle_j: Option<f64>,
     #[serde(default = "default_max_substeps")]
     pub(super) max_substeps_per_frame: i64,

@@ -23,8 +23,11 @@ pub struct SolverSettings {
     pub substeps: Option<u32>,
     /// `INTEGRATOR_EXPLICIT`, `INTEGRATOR_SYMPLECTIC` or `INTEGRATOR_IMPLICIT`.
     pub integrator: u32,
-    /// Vertex Block Descent sweeps per substep (implicit only).
+    /// Vertex Block Descent sweeps per substep (implicit only); with a tolerance, the most.
     pub iterations: u32,
+    /// Implicit Euler stops sweeping a substep once an iteration's largest Newton step is this
+    /// fraction of the first iteration's (`None`: always `iterations`).
+    pub tolerance: Option<f32>,
     /// Stop once kinetic energy per free particle falls below this (J).
     pub settle_ke_per_particle: Option<f32>,
     /// The most substeps per frame `auto` may choose before the scene is refused.
@@ -98,6 +101,25 @@ pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings,
         substeps,
         integrator,
         iterations: c.count("solver", "iterations", s.iterations, 1)?,
+        tolerance: match s.tolerance {
+            None => None,
+            Some(_) if integrator != INTEGRATOR_IMPLICIT => {
+                return Err(c.err(
+                    "solver",
+                    "tolerance",
+                    "a tolerance stops the implicit solve's sweeps; this scene's integrator has \
+                     none",
+                    "remove tolerance, or use integrator = \"implicit\"",
+                ))
+            }
+            Some(v) => Some(c.within(
+                "solver",
+                "tolerance",
+                v,
+                (1e-6, 0.999),
+                "(a fraction of the first sweep's largest step: 0.01 = 1%)",
+            )?),
+        },
         settle_ke_per_particle: match s.settle_ke_per_particle_j {
             None => None,
             Some(v) => Some(c.positive("solver", "settle_ke_per_particle_j", v, "J")?),
