@@ -278,7 +278,30 @@ struct Glb {
 /// Parses and validates `path` with the `gltf` crate and checks the garment against the OBJ
 /// `frames` written at `times`: base mesh, indices, one morph target per later frame, and a
 /// weights animation that selects target k − 1 at frame k.
+/// Runs the Khronos glTF validator on `path` when `.ci/run` installed it (it sets
+/// `DRAPEKIT_GLTF_VALIDATOR` to the npm package's node_modules); any error fails the test.
+fn khronos_validator(path: &Path) {
+    let Some(modules) = std::env::var_os("DRAPEKIT_GLTF_VALIDATOR") else {
+        eprintln!("the Khronos glTF validator is not installed (see .ci/run): not run");
+        return;
+    };
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join(".ci/validate_gltf.js");
+    let out = std::process::Command::new("node")
+        .arg(script)
+        .arg(path)
+        .env("NODE_PATH", modules)
+        .output()
+        .expect("node runs");
+    let report = String::from_utf8_lossy(&out.stdout);
+    eprintln!("{report}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "the glTF validator found errors:\n{report}"
+    );
+}
+
 fn check_glb(path: &Path, frames: &[Obj], triangles: &[[u32; 3]], times: &[f32]) -> Glb {
+    khronos_validator(path);
     use gltf::animation::util::{MorphTargetWeights, ReadOutputs, Rotations};
     let gltf = gltf::Gltf::from_slice(&std::fs::read(path).unwrap()).expect("a valid glb");
     let blob = gltf.blob.as_deref();
