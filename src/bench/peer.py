@@ -139,7 +139,7 @@ def newton_model(cloth, settings, solver):
     (no triangles, so no triangle forces or contacts), gravity along −y as in the benchmark."""
     import newton  # noqa: PLC0415
     import numpy as np  # noqa: PLC0415
-    from newton._src.sim.graph_coloring import color_graph  # noqa: PLC0415
+    from newton.utils import color_graph  # noqa: PLC0415
 
     builder = newton.ModelBuilder(up_axis=newton.Axis.Y, gravity=(0.0, -9.81, 0.0))
     for p, w in zip(cloth.positions, cloth.inv_masses):
