@@ -2,10 +2,18 @@
 //! tables and SVG plots that anyone reproduces with one command.
 //!
 //! - [`grid`]: whole substeps of the benchmark cloth at several sizes, on both backends;
-//! - [`integrators`]: one scene under symplectic and implicit Euler, on both backends.
+//! - [`integrators`]: one scene under symplectic and implicit Euler, on both backends;
+//! - [`peer`]: drapekit beside NVIDIA Warp's cloth benchmark and Newton's cloth solvers, on
+//!   Warp's benchmark cloth ([`warp_cloth`]), through a Python driver ([`python_peer`]).
 
 pub mod grid;
 pub mod integrators;
+pub mod peer;
+mod peer_report;
+pub mod python_peer;
+pub mod warp_cloth;
+
+pub use peer_report::CSV_HEADER as PEER_CSV_HEADER;
 
 pub use grid::{bench_model, bench_steps, BenchRow};
 

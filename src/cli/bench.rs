@@ -41,12 +41,66 @@ pub struct BenchCli {
 
 /// The benchmark subcommands.
 #[derive(Subcommand)]
-enum BenchCommand {}
+enum BenchCommand {
+    /// drapekit beside NVIDIA Warp's own cloth benchmark and Newton's cloth solvers (CPU), on
+    /// Warp's benchmark cloth, in one run; writes peer.csv and peer.md.
+    #[command(
+        after_help = "The peers run from a Python environment (default target/peer-venv) \
+        that the first run creates with pinned warp-lang and newton.\n\n\
+        Examples:\n  \
+        drapekit bench peer --sizes 64,128,256 --out out/peer\n  \
+        drapekit bench peer --quick --out out/peer-quick\n  \
+        drapekit bench peer --systems drapekit --quick --sizes 16 --newton-sizes 16"
+    )]
+    Peer(PeerArgs),
+}
+
+/// `drapekit bench peer`.
+#[derive(Args)]
+struct PeerArgs {
+    /// Grid sizes of the Warp comparison: N means Warp's N×N benchmark cloth.
+    #[arg(long, value_delimiter = ',', default_value = "64,128,256")]
+    sizes: Vec<u32>,
+    /// Grid sizes of the Newton comparison (Newton's two solvers and drapekit's two
+    /// integrators).
+    #[arg(long, value_delimiter = ',', default_value = "64")]
+    newton_sizes: Vec<u32>,
+    /// Timed frames per point (default 60, one simulated second as in Warp's benchmark;
+    /// 6 with --quick).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    frames: Option<u32>,
+    /// A short run: 6 frames per point.
+    #[arg(long)]
+    quick: bool,
+    /// Which systems to time: drapekit, warp, newton.
+    #[arg(long, value_delimiter = ',', default_value = "drapekit,warp,newton")]
+    systems: Vec<drapekit::bench::peer::System>,
+    /// Substeps per frame of the implicit points (Newton's VBD, drapekit's implicit Euler).
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
+    implicit_substeps: u32,
+    /// Sweeps per implicit substep.
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
+    iterations: u32,
+    /// Output folder for peer.csv and peer.md.
+    #[arg(long, default_value = "out/peer")]
+    out: PathBuf,
+    /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
+    #[arg(long, default_value = "auto")]
+    adapter: AdapterChoice,
+    /// The Python that creates the environment (3.10 or newer).
+    #[arg(long, default_value = "python3")]
+    python: String,
+    /// The Python environment's folder (created on first use).
+    #[arg(long, default_value = "target/peer-venv")]
+    venv: PathBuf,
+}
 
 /// Runs `drapekit bench …`.
 pub fn execute(b: BenchCli) -> Result<(), Error> {
     match (b.command, b.scene) {
-        (Some(command), _) => match command {},
+        (Some(command), _) => match command {
+            BenchCommand::Peer(p) => run_peer(p),
+        },
         (None, Some(scene)) => {
             drapekit::bench::integrators::run_cli(&scene, b.frames, &b.out, &b.adapter).map(|_| ())
         }
@@ -54,4 +108,36 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
             drapekit::bench::grid::run_cli(&b.sizes, b.substeps, b.repeats, &b.out, &b.adapter)
         }
     }
+}
+
+fn run_peer(p: PeerArgs) -> Result<(), Error> {
+    use drapekit::bench::peer::{run_cli, PeerOptions};
+    let positive = |sizes: &[u32], key: &str| {
+        if sizes.iter().any(|&n| n < 3) {
+            return Err(Error::Input(drapekit::error::InputError::new(
+                std::path::Path::new("drapekit bench peer"),
+                key,
+                format!("{sizes:?} has a size below 3"),
+                "use grid sizes of 3 or more (Warp's cloth has bend springs two apart)",
+            )));
+        }
+        Ok(())
+    };
+    positive(&p.sizes, "--sizes")?;
+    positive(&p.newton_sizes, "--newton-sizes")?;
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    run_cli(&PeerOptions {
+        sizes: p.sizes,
+        newton_sizes: p.newton_sizes,
+        frames: p.frames.unwrap_or(if p.quick { 6 } else { 60 }),
+        systems: p.systems,
+        implicit_substeps: p.implicit_substeps,
+        iterations: p.iterations,
+        out: p.out,
+        adapter: p.adapter,
+        python: p.python,
+        venv: p.venv,
+        command,
+    })
+    .map(|_| ())
 }
