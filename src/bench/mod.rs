@@ -2,8 +2,12 @@
 //! tables and SVG plots that anyone reproduces with one command.
 //!
 //! - [`grid`]: whole substeps of the benchmark cloth at several sizes, on both backends;
-//! - [`integrators`]: one scene under symplectic and implicit Euler, on both backends.
+//! - [`integrators`]: one scene under symplectic and implicit Euler, on both backends;
+//! - [`accuracy`]: what accuracy costs in time, knob by knob, against a fine reference;
+//! - [`effects`]: what each optional effect costs per substep, on both backends.
 
+pub mod accuracy;
+pub mod effects;
 pub mod grid;
 pub mod integrators;
 
