@@ -214,6 +214,7 @@ pub fn trade_off_svg(
                     grey.stroke_width(1),
                 ))
                 .map_err(draw)?;
+            // At the left end (cheap and accurate: usually empty); the legend sits upper right.
             chart
                 .draw_series([EmptyElement::at((x0, h.at.1))
                     + Text::new(
@@ -296,7 +297,7 @@ pub fn trade_off_svg(
             .map_err(draw)?;
         chart
             .configure_series_labels()
-            .position(SeriesLabelPosition::LowerLeft)
+            .position(SeriesLabelPosition::UpperRight)
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .draw()

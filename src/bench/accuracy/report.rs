@@ -326,7 +326,8 @@ fn describe(r: &Row) -> String {
     d
 }
 
-fn svg(rows: &[Row], env: &Environment, path: &std::path::Path) -> Result<(), Error> {
+/// Draws `accuracy.svg`: error against cost, the Pareto front, the noise floor.
+pub fn svg(rows: &[Row], env: &Environment, path: &std::path::Path) -> Result<(), Error> {
     let mut groups: Vec<Group> = Vec::new();
     let mut extra = TradeOff {
         front_name: "Pareto front".into(),
