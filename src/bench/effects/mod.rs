@@ -102,7 +102,7 @@ pub const CSV_COLUMNS: [&str; 22] = [
     "note",
 ];
 
-/// One effect on one backend. Times are µs per substep, medians of the timed batches.
+/// One effect on one backend. Times are µs per substep, the fastest of the timed batches.
 #[derive(Clone, Debug)]
 pub struct EffectRow {
     /// The effect.
@@ -129,7 +129,7 @@ pub struct EffectRow {
     /// A plan with no pass at all: what a batch costs per substep before any work (submission
     /// and waiting on the GPU).
     pub idle: f64,
-    /// The largest spread (max − min over median) of the timed batches, in %.
+    /// The largest spread (slowest − fastest over fastest) of the timed batches, in %.
     pub spread_percent: f64,
     /// Pipelines (GPU) or passes (CPU) with and without the effect, including the monitor.
     pub stages: (usize, usize),
@@ -254,38 +254,38 @@ fn steps(prep: &Prepared, count: usize) -> Vec<SubstepParams> {
     steps
 }
 
-/// Median and spread (max − min over median) of `repeats` timed batches, in s per substep,
-/// after one untimed batch.
-fn time_batches(
-    solver: &mut dyn Solver,
-    steps: &[SubstepParams],
+/// Times `solvers` in turns, one batch each per round for `repeats` rounds after one untimed
+/// round, so that a change in the machine's load falls on every plan alike. Returns, per
+/// solver, the fastest batch (the one least disturbed by other work) in s per substep and the
+/// spread (slowest − fastest)/fastest.
+fn time_in_turns(
+    solvers: &mut [(Box<dyn Solver>, &[SubstepParams])],
     repeats: usize,
-) -> Result<(f64, f64), Error> {
-    solver.advance(steps)?;
-    solver.finish()?;
-    let mut times = Vec::new();
-    for _ in 0..repeats.max(1) {
-        let start = Instant::now();
-        solver.advance(steps)?;
-        solver.finish()?;
-        times.push(start.elapsed().as_secs_f64() / steps.len() as f64);
+) -> Result<Vec<(f64, f64)>, Error> {
+    let mut times = vec![Vec::new(); solvers.len()];
+    for round in 0..=repeats.max(1) {
+        for (k, (solver, steps)) in solvers.iter_mut().enumerate() {
+            let start = Instant::now();
+            solver.advance(steps)?;
+            solver.finish()?;
+            if round > 0 {
+                times[k].push(start.elapsed().as_secs_f64() / steps.len() as f64);
+            }
+        }
     }
-    times.sort_by(|a, b| a.total_cmp(b));
-    let median = times[times.len() / 2];
-    let spread = if median > 0.0 {
-        (times[times.len() - 1] - times[0]) / median
-    } else {
-        0.0
-    };
-    Ok((median, spread))
-}
-
-/// One plan timed: µs per substep, the spread of its batches, its stages and GPU resources.
-struct Timed {
-    us: f64,
-    spread: f64,
-    stages: usize,
-    labels: Vec<&'static str>,
+    Ok(times
+        .iter()
+        .map(|t| {
+            let fastest = t.iter().copied().fold(f64::INFINITY, f64::min);
+            let slowest = t.iter().copied().fold(0.0, f64::max);
+            let spread = if fastest > 0.0 {
+                (slowest - fastest) / fastest
+            } else {
+                0.0
+            };
+            (fastest, spread)
+        })
+        .collect())
 }
 
 /// A solver, its stage count and its GPU resources' labels.
@@ -331,7 +331,7 @@ pub fn run_cli(opts: &EffectsOptions) -> Result<Vec<EffectRow>, Error> {
             a.name, a.driver, a.backend, a.device_type
         )
     });
-    let (repeats, target_s) = if opts.quick { (3, 0.05) } else { (7, 0.3) };
+    let (repeats, target_s) = if opts.quick { (3, 0.05) } else { (15, 0.1) };
     let mut rows = Vec::new();
     for effect in Effect::ALL {
         let in_scene = match effect {
@@ -424,25 +424,13 @@ fn measure(
     row.passes = own.iter().map(|p| p.name()).collect();
     // Batches of about `target_s`: five substeps of the plan with the effect set the size.
     let probe = steps(with, 5);
-    let (mut solver, _, _) = build(ctx, with, &with.plan, probe.len())?;
-    let (t, _) = time_batches(solver.as_mut(), &probe, 1)?;
+    let solver = build(ctx, with, &with.plan, probe.len())?.0;
+    let t = time_in_turns(&mut [(solver, &probe[..])], 1)?[0].0;
     row.batch = ((target_s / t).round() as usize).clamp(5, 400);
     let batch = row.batch;
-    let time = |prep: &Prepared, plan: &PassPlan| -> Result<Timed, Error> {
-        let steps = steps(prep, batch);
-        let (mut solver, stages, labels) = build(ctx, prep, plan, steps.len())?;
-        let (t, spread) = time_batches(solver.as_mut(), &steps, repeats)?;
-        Ok(Timed {
-            us: 1e6 * t,
-            spread,
-            stages,
-            labels,
-        })
-    };
-    let (w, wo) = (time(with, &with.plan)?, time(without, &without.plan)?);
-    let mut spread = w.spread.max(wo.spread);
-    (row.with, row.without) = (w.us, wo.us);
-    let (ws, wos, wr, wor) = (w.stages, wo.stages, w.labels, wo.labels);
+    let (with_steps, without_steps) = (steps(with, batch), steps(without, batch));
+    let (w, ws, wr) = build(ctx, with, &with.plan, batch)?;
+    let (wo, wos, wor) = build(ctx, without, &without.plan, batch)?;
     row.stages = (ws, wos);
     row.resources = (wr.len(), wor.len());
     // Labels repeat (one per stage that owns such an array): compare them as multisets.
@@ -455,14 +443,24 @@ fn measure(
             None => row.resources_added.push(label),
         }
     }
+    // The plan without the effect steps its own scene; the others step the scene with it.
+    let mut solvers = vec![(w, &with_steps[..]), (wo, &without_steps[..])];
     if own.is_empty() {
         row.note = "no pass of its own: it is evaluated inside vbd_solve".into();
     } else {
-        // The own passes' batch carries the same fixed cost as any batch: take it off.
-        row.idle = time(with, &PassPlan { passes: Vec::new() })?.us;
-        let alone = time(with, &PassPlan { passes: own })?;
-        spread = spread.max(alone.spread);
-        row.own = alone.us - row.idle;
+        // The own passes' batch carries the same fixed cost as any batch: the empty plan
+        // measures that, to take it off.
+        let alone = build(ctx, with, &PassPlan { passes: own }, batch)?.0;
+        let empty = build(ctx, with, &PassPlan { passes: Vec::new() }, batch)?.0;
+        solvers.push((alone, &with_steps[..]));
+        solvers.push((empty, &with_steps[..]));
+    }
+    let timed = time_in_turns(&mut solvers, repeats)?;
+    let spread = timed.iter().map(|t| t.1).fold(0.0, f64::max);
+    (row.with, row.without) = (1e6 * timed[0].0, 1e6 * timed[1].0);
+    if let [_, _, alone, empty] = timed[..] {
+        row.idle = 1e6 * empty.0;
+        row.own = 1e6 * (alone.0 - empty.0);
     }
     row.spread_percent = 100.0 * spread;
     Ok(row)

@@ -58,15 +58,18 @@ pub(super) fn md_text(
          plans are timed from the scene's first frame; \"own passes\" runs only the passes the \
          effect adds, less what a plan with no pass costs (the fixed cost of a batch). Residue = without − (with − own passes): what is left of an effect once \
          it is removed, zero when removing it takes exactly its passes away. Times are µs per \
-         substep, medians of {} timed batches after one untimed one; spread is the largest \
-         (slowest − fastest)/median of those batches. Stages: CPU passes or GPU pipelines \
+         substep, the fastest of {} timed batches (the one least disturbed by other work on \
+         the machine), after one untimed batch; the plans take turns, one batch each per \
+         round, so that a change in load falls on all alike; spread is the largest \
+         (slowest − fastest)/fastest of those batches. Stages: CPU passes or GPU pipelines \
          (the monitor included); resources: GPU buffers and textures.\n\n\
-         CPU: {cpu}. GPU: {}.\n\nReproduce: `drapekit bench effects {} --out {}{} --adapter {}`\n\n",
+         CPU: {cpu}. GPU: {}.\n\nReproduce: `drapekit --threads {} bench effects {} --out {}{} --adapter {}`\n\n",
         opts.scene.display(),
         base.model.len(),
         base.plan.names().join(", "),
-        if opts.quick { 3 } else { 7 },
+        if opts.quick { 3 } else { 15 },
         gpu.unwrap_or("none (no adapter)"),
+        rayon::current_num_threads(),
         opts.scene.display(),
         opts.out.display(),
         if opts.quick { " --quick" } else { "" },
