@@ -72,6 +72,22 @@ pub fn log_log_svg(
     write_atomic(path, svg.as_bytes())
 }
 
+/// 1, 2 and 5 times the powers of ten between `lo` and `hi`: tick marks for log axes.
+fn ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let mut ticks = Vec::new();
+    let mut decade = 10f64.powf(lo.log10().floor());
+    while decade <= hi {
+        for m in [1.0, 2.0, 5.0] {
+            let v = m * decade;
+            if v >= lo && v <= hi {
+                ticks.push(v);
+            }
+        }
+        decade *= 10.0;
+    }
+    ticks
+}
+
 fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (lo, hi) = values.fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
         (lo.min(v), hi.max(v))
@@ -81,4 +97,212 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     } else {
         (1.0, 10.0)
     }
+}
+
+/// A labelled point of a scatter plot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Labelled {
+    /// Position, both positive (log axes).
+    pub at: (f64, f64),
+    /// Text drawn beside it.
+    pub label: String,
+}
+
+/// A named group of labelled points, drawn in one colour.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Group {
+    /// Legend text.
+    pub name: String,
+    /// Its points.
+    pub points: Vec<Labelled>,
+}
+
+/// What a trade-off plot shows beyond its groups.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TradeOff {
+    /// Points joined by a dashed line, in order (e.g. a Pareto front).
+    pub front: Vec<(f64, f64)>,
+    /// The front's legend text.
+    pub front_name: String,
+    /// Points with an x but no y (e.g. runs that failed): crosses along the top edge.
+    pub top: Vec<Labelled>,
+    /// A vertical line at this x with its label (e.g. a reference with no y of its own).
+    pub vertical: Option<Labelled>,
+    /// A horizontal dotted line at this y with its label (e.g. a noise floor).
+    pub horizontal: Option<Labelled>,
+}
+
+/// Each group's points as labelled markers on log–log axes, the front as a dashed line, `top`
+/// as crosses along the top edge and `vertical` as a line, written as SVG atomically.
+pub fn trade_off_svg(
+    groups: &[Group],
+    extra: &TradeOff,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    path: &Path,
+) -> Result<(), Error> {
+    let xs = || {
+        (groups.iter().flat_map(|g| g.points.iter().map(|p| p.at.0)))
+            .chain(extra.top.iter().map(|p| p.at.0))
+            .chain(extra.vertical.iter().map(|p| p.at.0))
+    };
+    let (x_lo, x_hi) = range(xs());
+    let (y_lo, y_hi) = range(
+        (groups.iter().flat_map(|g| g.points.iter().map(|p| p.at.1)))
+            .chain(extra.horizontal.iter().map(|p| p.at.1)),
+    );
+    let (y_min, y_max) = (y_lo / 2.0, y_hi * 4.0);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1000, 680)).into_drawing_area();
+        let draw = |e: DrawingAreaErrorKind<std::io::Error>| {
+            Error::io(path, std::io::Error::other(format!("plotting failed: {e}")))
+        };
+        root.fill(&WHITE).map_err(draw)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 20))
+            .margin(16)
+            .x_label_area_size(48)
+            .y_label_area_size(80)
+            .build_cartesian_2d(
+                (x_lo / 1.5..x_hi * 2.5)
+                    .log_scale()
+                    .with_key_points(ticks(x_lo / 1.5, x_hi * 2.5)),
+                (y_min..y_max)
+                    .log_scale()
+                    .with_key_points(ticks(y_min, y_max)),
+            )
+            .map_err(draw)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .x_label_formatter(&|x| format!("{x:.0e}"))
+            .y_label_formatter(&|y| format!("{y:.0e}"))
+            // Log axes over less than a decade crowd the minor lines into grey bands.
+            .light_line_style(TRANSPARENT)
+            .draw()
+            .map_err(draw)?;
+        if let Some(v) = &extra.vertical {
+            let grey = RGBColor(120, 120, 120);
+            chart
+                .draw_series(LineSeries::new(
+                    [(v.at.0, y_min), (v.at.0, y_max)],
+                    grey.stroke_width(1),
+                ))
+                .map_err(draw)?;
+            // Left of the line, so that it stays inside the plot (about 6 px per character).
+            let width = 6 * v.label.chars().count() as i32;
+            chart
+                .draw_series([EmptyElement::at((v.at.0, y_min * 1.3))
+                    + Text::new(
+                        v.label.clone(),
+                        (-width - 6, -12),
+                        ("sans-serif", 12).into_font().color(&grey),
+                    )])
+                .map_err(draw)?;
+        }
+        if let Some(h) = &extra.horizontal {
+            let grey = RGBColor(90, 90, 160);
+            let (x0, x1) = (x_lo / 1.5, x_hi * 2.5);
+            chart
+                .draw_series(DashedLineSeries::new(
+                    [(x0, h.at.1), (x1, h.at.1)],
+                    2,
+                    4,
+                    grey.stroke_width(1),
+                ))
+                .map_err(draw)?;
+            // At the left end (cheap and accurate: usually empty); the legend sits upper right.
+            chart
+                .draw_series([EmptyElement::at((x0, h.at.1))
+                    + Text::new(
+                        h.label.clone(),
+                        (6, 3),
+                        ("sans-serif", 11).into_font().color(&grey),
+                    )])
+                .map_err(draw)?;
+        }
+        if extra.front.len() > 1 {
+            let front = extra.front.clone();
+            chart
+                .draw_series(DashedLineSeries::new(front, 6, 4, BLACK.stroke_width(1)))
+                .map_err(draw)?
+                .label(extra.front_name.clone())
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK));
+        }
+        for (k, g) in groups.iter().enumerate() {
+            let color = Palette99::pick(k).to_rgba();
+            chart
+                .draw_series(
+                    g.points
+                        .iter()
+                        .map(|p| Circle::new(p.at, 5, color.filled())),
+                )
+                .map_err(draw)?
+                .label(g.name.clone())
+                .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
+        }
+        // Labels go where they cover no marker and no other label, tried nearest first.
+        let points: Vec<&Labelled> = groups.iter().flat_map(|g| &g.points).collect();
+        let mut taken: Vec<[i32; 4]> = points
+            .iter()
+            .map(|p| {
+                let (x, y) = chart.backend_coord(&p.at);
+                [x - 6, y - 6, x + 6, y + 6]
+            })
+            .collect();
+        for p in points {
+            let (x, y) = chart.backend_coord(&p.at);
+            let (w, h) = (6 * p.label.chars().count() as i32, 12);
+            let offsets = [
+                (7, -14),
+                (7, 2),
+                (-w - 7, -14),
+                (-w - 7, 2),
+                (-w / 2, -22),
+                (-w / 2, 8),
+                (7, -28),
+                (7, 16),
+                (-w - 7, -28),
+                (-w - 7, 16),
+                (-w / 2, -36),
+                (-w / 2, 22),
+            ];
+            let free = |o: &(i32, i32)| {
+                let b = [x + o.0, y + o.1, x + o.0 + w, y + o.1 + h];
+                !taken
+                    .iter()
+                    .any(|t| b[0] < t[2] && t[0] < b[2] && b[1] < t[3] && t[1] < b[3])
+            };
+            let o = offsets.iter().copied().find(free).unwrap_or(offsets[0]);
+            taken.push([x + o.0, y + o.1, x + o.0 + w, y + o.1 + h]);
+            chart
+                .draw_series([EmptyElement::at(p.at)
+                    + Text::new(p.label.clone(), o, ("sans-serif", 11).into_font())])
+                .map_err(draw)?;
+        }
+        let red = RGBColor(200, 30, 30);
+        chart
+            .draw_series(extra.top.iter().map(|p| {
+                EmptyElement::at((p.at.0, y_max / 1.4))
+                    + Cross::new((0, 0), 5, red.stroke_width(2))
+                    + Text::new(
+                        p.label.clone(),
+                        (7, 2),
+                        ("sans-serif", 11).into_font().color(&red),
+                    )
+            }))
+            .map_err(draw)?;
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(draw)?;
+        root.present().map_err(draw)?;
+    }
+    write_atomic(path, svg.as_bytes())
 }

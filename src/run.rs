@@ -136,7 +136,7 @@ pub fn build_solver(
 }
 
 /// Whether the user picked the adapter (`--adapter` other than auto, or `WGPU_ADAPTER_NAME`).
-fn adapter_named(adapter: &AdapterChoice) -> bool {
+pub fn adapter_named(adapter: &AdapterChoice) -> bool {
     *adapter != AdapterChoice::Auto
         || std::env::var("WGPU_ADAPTER_NAME").is_ok_and(|name| !name.is_empty())
 }

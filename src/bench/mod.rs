@@ -3,9 +3,13 @@
 //!
 //! - [`grid`]: whole substeps of the benchmark cloth at several sizes, on both backends;
 //! - [`integrators`]: one scene under symplectic and implicit Euler, on both backends;
+//! - [`accuracy`]: what accuracy costs in time, knob by knob, against a fine reference;
+//! - [`effects`]: what each optional effect costs per substep, on both backends;
 //! - [`peer`]: drapekit beside NVIDIA Warp's cloth benchmark and Newton's cloth solvers, on
 //!   Warp's benchmark cloth ([`warp_cloth`]), through a Python driver ([`python_peer`]).
 
+pub mod accuracy;
+pub mod effects;
 pub mod grid;
 pub mod integrators;
 pub mod peer;

@@ -7,6 +7,7 @@ pub mod exact;
 pub mod motion;
 pub mod sdf;
 pub mod shapes;
+pub mod simplify;
 
 use crate::error::InputError;
 use crate::mesh::TriMesh;
