@@ -9,9 +9,11 @@ use serde::Serialize;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Pass {
+    /// Dihedral bending, each hinge evaluated once: its forces on its four vertices.
+    HingeForces,
     /// Stretch springs on mesh edges.
     SpringForces,
-    /// Dihedral bending on interior edges.
+    /// Dihedral bending on interior edges: each particle gathers what `hinge_forces` wrote.
     BendingForces,
     /// Per-triangle wind drag.
     WindForces,
@@ -48,7 +50,8 @@ pub enum Pass {
 
 impl Pass {
     /// Every stage, in execution order.
-    pub const ALL: [Pass; 16] = [
+    pub const ALL: [Pass; 17] = [
+        Pass::HingeForces,
         Pass::SpringForces,
         Pass::BendingForces,
         Pass::WindForces,
@@ -70,6 +73,7 @@ impl Pass {
     /// The stage name shared by the kernel file, the CPU twin, tests and bench ids.
     pub fn name(self) -> &'static str {
         match self {
+            Pass::HingeForces => "hinge_forces",
             Pass::SpringForces => "spring_forces",
             Pass::BendingForces => "bending_forces",
             Pass::WindForces => "wind_forces",
@@ -117,6 +121,7 @@ impl Pass {
     /// The stage's WGSL source, without `common.wgsl`.
     pub fn kernel_source(self) -> &'static str {
         match self {
+            Pass::HingeForces => include_str!("../kernels/hinge_forces.wgsl"),
             Pass::SpringForces => include_str!("../kernels/spring_forces.wgsl"),
             Pass::BendingForces => include_str!("../kernels/bending_forces.wgsl"),
             Pass::WindForces => include_str!("../kernels/wind_forces.wgsl"),
@@ -150,7 +155,9 @@ impl PassPlan {
         let wanted = |pass: &Pass| match pass {
             // Implicit Euler evaluates springs, hinges and seams inside its solve.
             Pass::SpringForces => !effects.implicit && !model.springs.is_empty(),
-            Pass::BendingForces => !effects.implicit && effects.bending && !model.hinges.is_empty(),
+            Pass::HingeForces | Pass::BendingForces => {
+                !effects.implicit && effects.bending && !model.hinges.is_empty()
+            }
             Pass::WindForces => effects.wind && !model.triangles.is_empty(),
             Pass::SeamForces => !effects.implicit && !model.seams.is_empty(),
             Pass::VbdInit | Pass::VbdSolve | Pass::VbdFinish => effects.implicit,

@@ -60,6 +60,7 @@ fn run_writes_frames_and_a_complete_summary() {
     assert_eq!(
         summary["passes"],
         serde_json::json!([
+            "hinge_forces",
             "spring_forces",
             "bending_forces",
             "integrate",
@@ -89,6 +90,7 @@ fn plan_json_lists_the_stages() {
     assert_eq!(
         plan["passes"],
         serde_json::json!([
+            "hinge_forces",
             "spring_forces",
             "bending_forces",
             "wind_forces",

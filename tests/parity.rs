@@ -31,6 +31,11 @@ fn pass_parity_in(prep: Prepared, pass: Pass) {
     cpu.set_state(&state);
     gpu.set_state(&state);
     let step: SubstepParams = substep_params(&prep, 3)[5];
+    // The bending gather reads what hinge_forces wrote.
+    if pass == Pass::BendingForces {
+        cpu.run_pass(Pass::HingeForces, &step);
+        gpu.run_passes(&[Pass::HingeForces], &[step]).unwrap();
+    }
     cpu.run_pass(pass, &step);
     gpu.run_passes(&[pass], &[step]).unwrap();
     if pass == Pass::Integrate {
@@ -92,6 +97,33 @@ fn parity_spring_forces() {
 #[test]
 fn parity_bending_forces() {
     pass_parity(Pass::BendingForces);
+}
+
+/// `hinge_forces` alone: each hinge's four forces, compared entry by entry. Each entry is one
+/// evaluation of the terms that `parity_bending_forces` sums, so the same bound (relative to the
+/// largest entry) holds with more margin.
+#[test]
+fn parity_hinge_forces() {
+    let Some(ctx) = gpu() else { return };
+    let prep = flag();
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
+    let state = perturbed(&cpu.state().unwrap(), 7, 5e-3, 0.5);
+    cpu.set_state(&state);
+    gpu.set_state(&state);
+    let step: SubstepParams = substep_params(&prep, 3)[5];
+    cpu.run_pass(Pass::HingeForces, &step);
+    gpu.run_passes(&[Pass::HingeForces], &[step]).unwrap();
+    let c = cpu.hinge_forces().unwrap();
+    let g = gpu.hinge_forces().unwrap();
+    assert_eq!(c.len(), 4 * prep.model.hinges.len());
+    let scale = max_norm(c);
+    assert!(scale > 0.0, "hinge_forces produced no force");
+    let diff = max_abs_diff(&g, c);
+    assert!(
+        diff <= 2e-5 * scale,
+        "hinge_forces: max diff {diff} N vs max force {scale} N"
+    );
 }
 
 #[test]

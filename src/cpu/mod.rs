@@ -13,6 +13,7 @@ mod hash_clear;
 mod hash_count;
 mod hash_fill;
 mod hash_scan;
+mod hinge_forces;
 mod integrate;
 mod monitor;
 mod seam_forces;
@@ -24,12 +25,13 @@ mod vbd_init;
 mod vbd_solve;
 mod wind_forces;
 
-pub use bending_forces::{bending_forces, hinge_force};
+pub use bending_forces::bending_forces;
 pub use collide_body::{collide_body, collide_edge, collide_edges, collide_particle};
 pub use hash_clear::hash_clear;
 pub use hash_count::{hash_bucket, hash_cell_of, hash_count};
 pub use hash_fill::hash_fill;
 pub use hash_scan::hash_scan;
+pub use hinge_forces::{hinge_force, hinge_forces, hinge_frame, HingeFrame};
 pub use integrate::integrate;
 pub use monitor::monitor;
 pub use seam_forces::{rest_gap, seam_force, seam_forces};
@@ -60,7 +62,7 @@ pub struct CpuSolver {
     /// Force accumulator, cleared by `integrate`.
     pub force: Vec<Vec4>,
     springs: Option<Csr<SpringRef>>,
-    hinges: Option<(Vec<Hinge>, Csr<u32>)>,
+    hinges: Option<Hinges>,
     triangles: Option<(Vec<[u32; 4]>, Csr<u32>)>,
     seams: Option<(Vec<Seam>, Csr<u32>)>,
     collider: Option<std::sync::Arc<crate::body::Collider>>,
@@ -78,6 +80,14 @@ pub struct CpuSolver {
     monitor_springs: Csr<SpringRef>,
     /// Strain limiting's springs and its Jacobi scratch pair (positions, velocities).
     strain: Option<(Csr<SpringRef>, Vec<Vec4>, Vec<Vec4>)>,
+}
+
+/// The hinges, each particle's hinge refs, and the forces `hinge_forces` evaluated once per
+/// hinge (four per hinge, at the refs' indices) for the gather.
+struct Hinges {
+    hinges: Vec<Hinge>,
+    csr: Csr<u32>,
+    forces: Vec<Vec4>,
 }
 
 /// Vertex Block Descent: the elements, the colour order and sweeps, and the solve's arrays.
@@ -125,9 +135,11 @@ impl CpuSolver {
             springs: plan
                 .contains(Pass::SpringForces)
                 .then(|| model.spring_csr()),
-            hinges: plan
-                .contains(Pass::BendingForces)
-                .then(|| (model.hinges.clone(), model.hinge_csr())),
+            hinges: plan.contains(Pass::HingeForces).then(|| Hinges {
+                hinges: model.hinges.clone(),
+                csr: model.hinge_csr(),
+                forces: vec![Vec4::ZERO; 4 * model.hinges.len()],
+            }),
             triangles: plan
                 .contains(Pass::WindForces)
                 .then(|| (model.packed_triangles(), model.triangle_csr())),
@@ -188,6 +200,11 @@ impl CpuSolver {
         &self.plan
     }
 
+    /// The forces `hinge_forces` wrote, four per hinge (for per-stage parity tests).
+    pub fn hinge_forces(&self) -> Option<&[Vec4]> {
+        self.hinges.as_ref().map(|h| &h.forces[..])
+    }
+
     /// The `monitor` stage's per-block partials of the current state.
     pub fn health_partials(&self) -> Vec<crate::solver::HealthPartial> {
         let csr = &self.monitor_springs;
@@ -212,19 +229,19 @@ impl CpuSolver {
                     &csr.items,
                 );
             }
+            Pass::HingeForces => {
+                let h = self
+                    .hinges
+                    .as_mut()
+                    .expect("hinge_forces is not in the plan");
+                hinge_forces(&self.pos, &h.hinges, &mut h.forces);
+            }
             Pass::BendingForces => {
-                let (hinges, csr) = self
+                let h = self
                     .hinges
                     .as_ref()
                     .expect("bending_forces is not in the plan");
-                bending_forces(
-                    p,
-                    &self.pos,
-                    &mut self.force,
-                    &csr.offsets,
-                    &csr.items,
-                    hinges,
-                );
+                bending_forces(p, &mut self.force, &h.csr.offsets, &h.csr.items, &h.forces);
             }
             Pass::WindForces => {
                 let (tris, csr) = self

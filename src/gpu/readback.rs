@@ -94,6 +94,27 @@ impl GpuSolver {
         Ok(self.read_back(&[&self.forces[self.last_forces]])?.remove(0))
     }
 
+    /// Reads back the forces `hinge_forces` wrote, four per hinge (for per-stage parity tests).
+    pub fn hinge_forces(&self) -> Result<Vec<Vec4>, Error> {
+        let h = self
+            .hinge_forces
+            .as_ref()
+            .ok_or_else(|| Error::Gpu("hinge_forces is not in the plan".into()))?;
+        let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hinge_forces staging"),
+            size: h.padded_bytes(),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        h.copy_to_buffer(&mut encoder, &staging, 0);
+        self.ctx.queue.submit([encoder.finish()]);
+        let len = 4 * self.hinges;
+        self.map_read(staging.slice(..), |bytes| {
+            bytemuck::cast_slice::<u8, Vec4>(bytes)[..len].to_vec()
+        })
+    }
+
     pub(super) fn read_back(&self, arrays: &[&TexelArray]) -> Result<Vec<Vec<Vec4>>, Error> {
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         let mut at = 0;

@@ -53,11 +53,15 @@ pub struct GpuSolver {
     pub(super) pos: [TexelArray; 2],
     pub(super) vel: [TexelArray; 2],
     pub(super) forces: Vec<TexelArray>,
+    /// What `hinge_forces` writes and the gather reads: four texels per hinge.
+    pub(super) hinge_forces: Option<TexelArray>,
     /// Which of `pos`/`vel` holds the current state.
     pub(super) current: usize,
     /// Which of `forces` the last force stage wrote.
     pub(super) last_forces: usize,
     pub(super) n: usize,
+    /// Hinges in the model.
+    pub(super) hinges: usize,
     pub(super) staging: wgpu::Buffer,
     pub(super) substeps: Option<SubstepBuffer>,
     pub(super) stages: Vec<Stage>,
@@ -107,6 +111,20 @@ impl GpuSolver {
         let forces = (0..force_textures)
             .map(|_| TexelArray::new(ctx, "forces", Rgba32Float, n, state_usage))
             .collect::<Result<Vec<_>, _>>()?;
+        let hinge_forces = match plan.contains(Pass::HingeForces) {
+            true => {
+                labels.push("hinge_forces");
+                let len = 4 * model.hinges.len();
+                Some(TexelArray::new(
+                    ctx,
+                    "hinge_forces",
+                    Rgba32Float,
+                    len,
+                    state_usage,
+                )?)
+            }
+            false => None,
+        };
         let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("staging"),
             size: 2 * pos[0].padded_bytes(),
@@ -263,7 +281,15 @@ impl GpuSolver {
             let bindings = |p: usize| -> Vec<Binding> {
                 let o = |k: usize| Binding::Read(&owned[k]);
                 let out = || Binding::Write(&forces[force_out.expect("force stage")]);
+                let per_hinge = || hinge_forces.as_ref().expect("hinge_forces is in the plan");
                 match pass {
+                    Pass::HingeForces => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Read(&pos[p]),
+                        o(0),
+                        o(1),
+                        Binding::Write(per_hinge()),
+                    ],
                     Pass::SpringForces => vec![
                         Binding::Uniform(&params_buf),
                         Binding::Read(&pos[p]),
@@ -274,11 +300,10 @@ impl GpuSolver {
                     ],
                     Pass::BendingForces => vec![
                         Binding::Uniform(&params_buf),
-                        Binding::Read(&pos[p]),
                         out(),
                         o(0),
                         o(1),
-                        o(2),
+                        Binding::Read(per_hinge()),
                     ],
                     Pass::WindForces => vec![
                         Binding::Uniform(&params_buf),
@@ -420,6 +445,7 @@ impl GpuSolver {
             let dispatch = match pass {
                 Pass::HashClear => dispatch_for(params.hash_buckets),
                 Pass::HashScan => (1, 1),
+                Pass::HingeForces => dispatch_for(model.hinges.len() as u32),
                 _ => dispatch_for(n as u32),
             };
             let mut stage = build_stage(
@@ -449,9 +475,11 @@ impl GpuSolver {
             pos,
             vel,
             forces,
+            hinge_forces,
             current: 0,
             last_forces: 0,
             n,
+            hinges: model.hinges.len(),
             staging,
             substeps,
             stages,
@@ -562,6 +590,10 @@ impl Solver for GpuSolver {
 enum Elements {
     Springs,
     Hinges,
+    /// Hinge offsets and the hinges (for `hinge_forces`: the offsets' total counts them).
+    HingeList,
+    /// Hinge offsets and refs (for the gather).
+    HingeRefs,
     Seams,
     Triangles,
     SelfNeighbours,
@@ -571,7 +603,8 @@ enum Elements {
 fn stage_elements(pass: Pass, energies: VbdEnergies) -> Vec<Elements> {
     match pass {
         Pass::SpringForces | Pass::StrainLimit | Pass::Monitor => vec![Elements::Springs],
-        Pass::BendingForces => vec![Elements::Hinges],
+        Pass::HingeForces => vec![Elements::HingeList],
+        Pass::BendingForces => vec![Elements::HingeRefs],
         Pass::WindForces => vec![Elements::Triangles],
         Pass::SeamForces => vec![Elements::Seams],
         Pass::SelfCollide => vec![Elements::SelfNeighbours],
@@ -615,6 +648,29 @@ fn element_arrays(
             vec![
                 (offsets, R32Uint, bytes(bytemuck::cast_slice(&csr.offsets))),
                 (items, Rgba32Uint, bytes(bytemuck::cast_slice(&csr.items))),
+            ]
+        }
+        Elements::HingeList | Elements::HingeRefs => {
+            let csr = model.hinge_csr();
+            let second = match kind {
+                Elements::HingeList => (
+                    "hinges",
+                    Rgba32Uint,
+                    bytes(bytemuck::cast_slice(&model.hinges)),
+                ),
+                _ => (
+                    "hinge_refs",
+                    R32Uint,
+                    bytes(bytemuck::cast_slice(&csr.items)),
+                ),
+            };
+            vec![
+                (
+                    "hinge_offsets",
+                    R32Uint,
+                    bytes(bytemuck::cast_slice(&csr.offsets)),
+                ),
+                second,
             ]
         }
         Elements::Hinges => {
