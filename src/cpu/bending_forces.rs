@@ -1,7 +1,7 @@
 //! CPU twin of `kernels/bending_forces.wgsl`.
 
 use crate::model::layout::SimParams;
-use glam::{Vec3, Vec4};
+use glam::Vec4;
 use rayon::prelude::*;
 
 /// Adds each particle's bending forces to `force`: the sum, in CSR order, of the entries of
@@ -19,10 +19,11 @@ pub fn bending_forces(
         .par_iter_mut()
         .enumerate()
         .for_each(|(i, force)| {
-            let mut f = Vec3::ZERO;
+            // w is 0 in every entry, so whole-vector sums give xyz's bits as Vec3 sums would.
+            let mut f = Vec4::ZERO;
             for k in hinge_offsets[i]..hinge_offsets[i + 1] {
-                f += hinge_forces[hinge_refs[k as usize] as usize].truncate();
+                f += hinge_forces[hinge_refs[k as usize] as usize];
             }
-            *force += f.extend(0.0);
+            *force += f;
         });
 }

@@ -1,7 +1,7 @@
 //! CPU twin of `kernels/hinge_forces.wgsl`, and the hinge geometry that `vbd_solve` shares.
 
 use crate::model::layout::Hinge;
-use glam::{Vec3, Vec4};
+use glam::{Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
 
 /// Force on vertex `role` of hinge `h` (roles 0, 1: shared edge; 2, 3: opposite vertices).
@@ -13,15 +13,16 @@ pub fn hinge_force(pos: &[Vec4], h: &Hinge, role: u32) -> Vec3 {
 }
 
 /// A hinge's terms shared by its four vertices (Bridson, Marino & Fedkiw 2003): the force on
-/// vertex `role` is weight · (sin(θ/2) − sin(θ0/2)) · `direction(role)`.
+/// vertex `role` is weight · (sin(θ/2) − sin(θ0/2)) · `direction(role)`. In `Vec3A`: the same
+/// IEEE operations lane by lane as `Vec3` (the same bits), with one SIMD divide per vector.
 pub struct HingeFrame {
-    x: [Vec3; 4],
-    e_hat: Vec3,
+    x: [Vec3A; 4],
+    e_hat: Vec3A,
     e_len: f32,
     /// n1 / |n1|².
-    a: Vec3,
+    a: Vec3A,
     /// n2 / |n2|².
-    b: Vec3,
+    b: Vec3A,
     /// k·|E|²/(|N1| + |N2|), in N·m.
     pub weight: f32,
     /// sin(θ/2) of the signed dihedral angle.
@@ -30,7 +31,13 @@ pub struct HingeFrame {
 
 impl HingeFrame {
     /// The direction u of vertex `role` (the gradient of θ up to sign), in 1/m.
+    #[inline]
     pub fn direction(&self, role: u32) -> Vec3 {
+        self.direction_a(role).into()
+    }
+
+    #[inline]
+    fn direction_a(&self, role: u32) -> Vec3A {
         let [x3, x4, x1, x2] = self.x;
         let (a, b, e_hat) = (self.a, self.b, self.e_hat);
         match role {
@@ -43,8 +50,9 @@ impl HingeFrame {
 }
 
 /// The hinge's weight, angle and directions; `None` for a degenerate hinge.
+#[inline]
 pub fn hinge_frame(pos: &[Vec4], h: &Hinge) -> Option<HingeFrame> {
-    let p = |i: u32| pos[i as usize].truncate();
+    let p = |i: u32| Vec3A::from_vec4(pos[i as usize]);
     let (x3, x4, x1, x2) = (p(h.v[0]), p(h.v[1]), p(h.v[2]), p(h.v[3]));
     let e = x4 - x3;
     let n1 = (x1 - x3).cross(x1 - x4);
@@ -107,7 +115,7 @@ pub fn hinge_forces(pos: &[Vec4], hinges: &[Hinge], forces: &mut [Vec4]) {
             Some(t) => {
                 let c = t.weight * (t.sin_half - h.rest_sin_half);
                 for (role, f) in out.iter_mut().enumerate() {
-                    *f = (c * t.direction(role as u32)).extend(0.0);
+                    *f = (c * t.direction_a(role as u32)).extend(0.0);
                 }
             }
             None => out.fill(Vec4::ZERO),
