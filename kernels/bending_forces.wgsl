@@ -17,7 +17,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let end = textureLoad(hinge_offsets, texel(i + 1u), 0).x;
     var f = vec3<f32>(0.0);
     for (var k = first; k < end; k = k + 1u) {
-        f = f + textureLoad(hinge_forces, texel(textureLoad(hinge_refs, texel(k), 0).x), 0).xyz;
+        let r = textureLoad(hinge_refs, texel(k), 0).x;
+        f = f + textureLoad(hinge_forces, hinge_force_texel(r / 4u, r % 4u), 0).xyz;
     }
     textureStore(force_out, texel(i), vec4<f32>(previous_force(i) + f, 0.0));
 }

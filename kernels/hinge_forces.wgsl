@@ -22,12 +22,20 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         return;
     }
     let hinge = unpack_hinge(textureLoad(hinges, texel(2u * h), 0), textureLoad(hinges, texel(2u * h + 1u), 0));
-    let frame = hinge_frame(hinge.stiffness, position(hinge.v.x), position(hinge.v.y), position(hinge.v.z), position(hinge.v.w));
-    for (var role = 0u; role < 4u; role = role + 1u) {
-        var f = vec3<f32>(0.0);
-        if (frame.valid) {
-            f = frame.weight * (frame.sin_half - hinge.rest_sin_half) * hinge_direction(frame, role);
-        }
-        textureStore(hinge_forces, texel(4u * h + role), vec4<f32>(f, 0.0));
+    let t = hinge_frame(hinge.stiffness, position(hinge.v.x), position(hinge.v.y), position(hinge.v.z), position(hinge.v.w));
+    var f0 = vec3<f32>(0.0);
+    var f1 = vec3<f32>(0.0);
+    var f2 = vec3<f32>(0.0);
+    var f3 = vec3<f32>(0.0);
+    if (t.valid) {
+        let c = t.weight * (t.sin_half - hinge.rest_sin_half);
+        f0 = c * (dot(t.x1 - t.x4, t.e_hat) * t.a + dot(t.x2 - t.x4, t.e_hat) * t.b);
+        f1 = c * (-dot(t.x1 - t.x3, t.e_hat) * t.a - dot(t.x2 - t.x3, t.e_hat) * t.b);
+        f2 = c * (t.e_len * t.a);
+        f3 = c * (t.e_len * t.b);
     }
+    textureStore(hinge_forces, hinge_force_texel(h, 0u), vec4<f32>(f0, 0.0));
+    textureStore(hinge_forces, hinge_force_texel(h, 1u), vec4<f32>(f1, 0.0));
+    textureStore(hinge_forces, hinge_force_texel(h, 2u), vec4<f32>(f2, 0.0));
+    textureStore(hinge_forces, hinge_force_texel(h, 3u), vec4<f32>(f3, 0.0));
 }
