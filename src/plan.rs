@@ -9,12 +9,11 @@ use serde::Serialize;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Pass {
-    /// Dihedral bending, each hinge evaluated once: its forces on its four vertices.
+    /// Dihedral bending, each hinge evaluated once: its forces on its four vertices, which
+    /// `integrate` gathers per particle.
     HingeForces,
     /// Stretch springs on mesh edges.
     SpringForces,
-    /// Dihedral bending on interior edges: each particle gathers what `hinge_forces` wrote.
-    BendingForces,
     /// Per-triangle wind drag.
     WindForces,
     /// Seam penalty springs between sewn edges.
@@ -26,7 +25,8 @@ pub enum Pass {
     VbdSolve,
     /// Implicit Euler 3/3: v = (x − xₙ)/h, the next state.
     VbdFinish,
-    /// Euler integration; after every force stage.
+    /// Euler integration; after every force stage. Gathers the bending forces `hinge_forces`
+    /// wrote.
     Integrate,
     /// Jacobi projection of over-stretched edges back to the strain limit (positions, and
     /// velocities by the same displacement over the step); after the step, before collisions.
@@ -50,10 +50,9 @@ pub enum Pass {
 
 impl Pass {
     /// Every stage, in execution order.
-    pub const ALL: [Pass; 17] = [
+    pub const ALL: [Pass; 16] = [
         Pass::HingeForces,
         Pass::SpringForces,
-        Pass::BendingForces,
         Pass::WindForces,
         Pass::SeamForces,
         Pass::VbdInit,
@@ -75,7 +74,6 @@ impl Pass {
         match self {
             Pass::HingeForces => "hinge_forces",
             Pass::SpringForces => "spring_forces",
-            Pass::BendingForces => "bending_forces",
             Pass::WindForces => "wind_forces",
             Pass::SeamForces => "seam_forces",
             Pass::VbdInit => "vbd_init",
@@ -102,7 +100,7 @@ impl Pass {
     pub fn is_force(self) -> bool {
         matches!(
             self,
-            Pass::SpringForces | Pass::BendingForces | Pass::WindForces | Pass::SeamForces
+            Pass::SpringForces | Pass::WindForces | Pass::SeamForces
         )
     }
 
@@ -123,7 +121,6 @@ impl Pass {
         match self {
             Pass::HingeForces => include_str!("../kernels/hinge_forces.wgsl"),
             Pass::SpringForces => include_str!("../kernels/spring_forces.wgsl"),
-            Pass::BendingForces => include_str!("../kernels/bending_forces.wgsl"),
             Pass::WindForces => include_str!("../kernels/wind_forces.wgsl"),
             Pass::SeamForces => include_str!("../kernels/seam_forces.wgsl"),
             Pass::VbdInit => include_str!("../kernels/vbd_init.wgsl"),
@@ -155,9 +152,7 @@ impl PassPlan {
         let wanted = |pass: &Pass| match pass {
             // Implicit Euler evaluates springs, hinges and seams inside its solve.
             Pass::SpringForces => !effects.implicit && !model.springs.is_empty(),
-            Pass::HingeForces | Pass::BendingForces => {
-                !effects.implicit && effects.bending && !model.hinges.is_empty()
-            }
+            Pass::HingeForces => !effects.implicit && effects.bending && !model.hinges.is_empty(),
             Pass::WindForces => effects.wind && !model.triangles.is_empty(),
             Pass::SeamForces => !effects.implicit && !model.seams.is_empty(),
             Pass::VbdInit | Pass::VbdSolve | Pass::VbdFinish => effects.implicit,

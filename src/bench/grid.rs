@@ -155,9 +155,10 @@ pub fn run_cli(
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let mut csv = String::from("size,particles,backend,device,substeps_per_batch,median_seconds,particle_substeps_per_second\n");
     let mut md = format!(
-        "Whole substep (spring_forces, bending_forces, integrate), {substeps} substeps per batch \
+        "Whole substep ({}), {substeps} substeps per batch \
          (one submission on the GPU), median of {repeats} batches.\n\n\
-         | grid | particles | backend | particle-substeps/s | s per batch | device |\n|---|---|---|---|---|---|\n"
+         | grid | particles | backend | particle-substeps/s | s per batch | device |\n|---|---|---|---|---|---|\n",
+        bench_model(2).2.names().join(", ")
     );
     for r in &rows {
         csv.push_str(&format!(

@@ -7,7 +7,6 @@
 //! on the caller's rayon pool (`--threads`). The spatial-hash build (a scatter) and the
 //! point–triangle self-collision reference (Gauss–Seidel) stay serial.
 
-mod bending_forces;
 mod collide_body;
 mod hash_clear;
 mod hash_count;
@@ -25,14 +24,13 @@ mod vbd_init;
 mod vbd_solve;
 mod wind_forces;
 
-pub use bending_forces::bending_forces;
 pub use collide_body::{collide_body, collide_edge, collide_edges, collide_particle};
 pub use hash_clear::hash_clear;
 pub use hash_count::{hash_bucket, hash_cell_of, hash_count};
 pub use hash_fill::hash_fill;
 pub use hash_scan::hash_scan;
 pub use hinge_forces::{hinge_force, hinge_forces, hinge_frame, HingeFrame};
-pub use integrate::integrate;
+pub use integrate::{integrate, HingeGather};
 pub use monitor::monitor;
 pub use seam_forces::{rest_gap, seam_force, seam_forces};
 pub use self_collide::{point_triangle_impulses, self_collide};
@@ -83,7 +81,7 @@ pub struct CpuSolver {
 }
 
 /// The hinges, each particle's hinge refs, and the forces `hinge_forces` evaluated once per
-/// hinge (four per hinge, at the refs' indices) for the gather.
+/// hinge (four per hinge, at the refs' indices) for `integrate` to gather.
 struct Hinges {
     hinges: Vec<Hinge>,
     csr: Csr<u32>,
@@ -236,13 +234,6 @@ impl CpuSolver {
                     .expect("hinge_forces is not in the plan");
                 hinge_forces(&self.pos, &h.hinges, &mut h.forces);
             }
-            Pass::BendingForces => {
-                let h = self
-                    .hinges
-                    .as_ref()
-                    .expect("bending_forces is not in the plan");
-                bending_forces(p, &mut self.force, &h.csr.offsets, &h.csr.items, &h.forces);
-            }
             Pass::WindForces => {
                 let (tris, csr) = self
                     .triangles
@@ -353,7 +344,14 @@ impl CpuSolver {
                 let v = self.vbd.as_ref().expect("vbd_finish is not in the plan");
                 vbd_finish(p, &v.x, &mut self.pos, &mut self.vel);
             }
-            Pass::Integrate => integrate(p, &mut self.pos, &mut self.vel, &mut self.force),
+            Pass::Integrate => {
+                let hinges = self.hinges.as_ref().map(|h| HingeGather {
+                    offsets: &h.csr.offsets,
+                    refs: &h.csr.items,
+                    forces: &h.forces,
+                });
+                integrate(p, &mut self.pos, &mut self.vel, &mut self.force, hinges);
+            }
             Pass::Monitor => {
                 panic!("monitor runs per frame through health(), not as a substep stage")
             }

@@ -11,7 +11,7 @@ use super::kernels::{compose_with, ForceInput, VbdEnergies};
 use super::pipelines::{build_stage, Binding, Stage};
 use super::texels::TexelArray;
 use crate::error::Error;
-use crate::model::layout::{SimParams, SubstepParams, Sweep, WORKGROUP_SIZE};
+use crate::model::layout::{SimParams, SubstepParams, Sweep, TEXELS_PER_ROW, WORKGROUP_SIZE};
 use crate::model::ClothModel;
 use crate::plan::{Pass, PassPlan};
 use crate::solver::{AdapterReport, ParticleState, Solver};
@@ -114,7 +114,9 @@ impl GpuSolver {
         let hinge_forces = match plan.contains(Pass::HingeForces) {
             true => {
                 labels.push("hinge_forces");
-                let len = 4 * model.hinges.len();
+                // Four texture rows per row of hinges (`hinge_force_texel` in common.wgsl).
+                let row = TEXELS_PER_ROW as usize;
+                let len = 4 * model.hinges.len().div_ceil(row) * row;
                 Some(TexelArray::new(
                     ctx,
                     "hinge_forces",
@@ -246,6 +248,15 @@ impl GpuSolver {
         let mut force_index = 0;
         // The substep plan, then the per-frame monitor.
         for &pass in plan.passes.iter().chain(&[Pass::Monitor]) {
+            // integrate's bending section gathers what hinge_forces wrote.
+            let energies = match pass {
+                Pass::Integrate => VbdEnergies {
+                    bending: hinge_forces.is_some(),
+                    seams: false,
+                    body: false,
+                },
+                _ => energies,
+            };
             // Stage-specific arrays live as long as the bind groups that hold them.
             let mut owned: Vec<TexelArray> = Vec::new();
             let mut add = |label: &'static str, format, bytes: &[u8]| -> Result<(), Error> {
@@ -297,13 +308,6 @@ impl GpuSolver {
                         out(),
                         o(0),
                         o(1),
-                    ],
-                    Pass::BendingForces => vec![
-                        Binding::Uniform(&params_buf),
-                        out(),
-                        o(0),
-                        o(1),
-                        Binding::Read(per_hinge()),
                     ],
                     Pass::WindForces => vec![
                         Binding::Uniform(&params_buf),
@@ -426,14 +430,21 @@ impl GpuSolver {
                         o(1),
                         Binding::Storage(&health, false),
                     ],
-                    Pass::Integrate => vec![
-                        Binding::Uniform(&params_buf),
-                        Binding::Read(&pos[p]),
-                        Binding::Read(&vel[p]),
-                        Binding::Read(&forces[summed]),
-                        Binding::Write(&pos[1 - p]),
-                        Binding::Write(&vel[1 - p]),
-                    ],
+                    Pass::Integrate => {
+                        let mut list = vec![
+                            Binding::Uniform(&params_buf),
+                            Binding::Read(&pos[p]),
+                            Binding::Read(&vel[p]),
+                            Binding::Read(&forces[summed]),
+                            Binding::Write(&pos[1 - p]),
+                            Binding::Write(&vel[1 - p]),
+                        ];
+                        list.extend(match hinge_forces.is_some() {
+                            true => [o(0), o(1), Binding::Read(per_hinge())],
+                            false => [Binding::Gap; 3],
+                        });
+                        list
+                    }
                 }
             };
             let input = if force_in.is_some() {
@@ -604,7 +615,6 @@ fn stage_elements(pass: Pass, energies: VbdEnergies) -> Vec<Elements> {
     match pass {
         Pass::SpringForces | Pass::StrainLimit | Pass::Monitor => vec![Elements::Springs],
         Pass::HingeForces => vec![Elements::HingeList],
-        Pass::BendingForces => vec![Elements::HingeRefs],
         Pass::WindForces => vec![Elements::Triangles],
         Pass::SeamForces => vec![Elements::Seams],
         Pass::SelfCollide => vec![Elements::SelfNeighbours],
@@ -622,6 +632,8 @@ fn stage_elements(pass: Pass, energies: VbdEnergies) -> Vec<Elements> {
             }
             kinds
         }
+        // `integrate` gathers the bending forces when the plan evaluates hinges.
+        Pass::Integrate if energies.bending => vec![Elements::HingeRefs],
         Pass::HashClear
         | Pass::HashCount
         | Pass::HashScan
