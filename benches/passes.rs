@@ -1,4 +1,5 @@
 //! Criterion benches: each pass and a whole substep, CPU twin vs GPU, at 64², 128² and 256².
+//! Both ways of evaluating hinges are measured on both backends (`HingeEvaluation`).
 //! Throughput is in particle-substeps. GPU batches are one submission, timed to completion.
 //! `WGPU_ADAPTER_NAME` picks the adapter (default: wgpu's choice, e.g. lavapipe on CI machines).
 
@@ -6,7 +7,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use drapekit::bench::{bench_model, bench_steps, cpu_description};
 use drapekit::cpu::CpuSolver;
 use drapekit::gpu::{AdapterChoice, GpuContext, GpuSolver};
-use drapekit::plan::Pass;
+use drapekit::plan::{HingeEvaluation, Pass};
 use drapekit::solver::Solver;
 use std::time::{Duration, Instant};
 
@@ -32,16 +33,26 @@ fn gpu_context() -> Option<GpuContext> {
     }
 }
 
+/// Each pass of the bench cloth alone (the passes of both ways of evaluating hinges: per vertex,
+/// `bending_forces`, and once per hinge, `hinge_forces` with `integrate` gathering), on both
+/// backends, so that each way is measured on each.
 fn per_pass(c: &mut Criterion) {
     eprintln!("CPU: {}", cpu_description());
     let ctx = gpu_context();
-    for pass in Pass::ALL.into_iter().filter(|&p| p != Pass::WindForces) {
+    let passes = [
+        (Pass::HingeForces, HingeEvaluation::Once),
+        (Pass::SpringForces, HingeEvaluation::Once),
+        (Pass::BendingForces, HingeEvaluation::PerVertex),
+        (Pass::Integrate, HingeEvaluation::Once),
+    ];
+    for (pass, hinges) in passes {
         let mut group = c.benchmark_group(pass.name());
         group
             .sample_size(10)
             .measurement_time(Duration::from_secs(3));
         for n in SIZES {
             let (model, params, plan) = bench_model(n);
+            let plan = plan.with_hinges(hinges);
             let steps = bench_steps(PASS_BATCH, params.dt);
             group.throughput(Throughput::Elements(model.len() as u64 * PASS_BATCH as u64));
             let mut cpu = CpuSolver::new(&model, params, &plan);
@@ -71,6 +82,8 @@ fn per_pass(c: &mut Criterion) {
     }
 }
 
+/// Whole substeps, each way of evaluating hinges on each backend (`cpu/once` and
+/// `gpu/per_vertex` are what the backends run by default).
 fn whole_substep(c: &mut Criterion) {
     let ctx = gpu_context();
     let mut group = c.benchmark_group("substep");
@@ -83,23 +96,29 @@ fn whole_substep(c: &mut Criterion) {
         group.throughput(Throughput::Elements(
             model.len() as u64 * SUBSTEP_BATCH as u64,
         ));
-        let mut cpu = CpuSolver::new(&model, params, &plan);
-        group.bench_function(BenchmarkId::new("cpu", format!("{n}x{n}")), |b| {
-            b.iter(|| cpu.advance(&steps).unwrap())
-        });
-        if let Some(ctx) = &ctx {
-            let mut gpu =
-                GpuSolver::new(ctx, &model, params, &plan, SUBSTEP_BATCH as usize).unwrap();
-            group.bench_function(BenchmarkId::new("gpu", format!("{n}x{n}")), |b| {
-                b.iter_custom(|iters| {
-                    let start = Instant::now();
-                    for _ in 0..iters {
-                        gpu.advance(&steps).unwrap();
-                        gpu.finish().unwrap();
-                    }
-                    start.elapsed()
-                })
-            });
+        for (hinges, way) in [
+            (HingeEvaluation::Once, "once"),
+            (HingeEvaluation::PerVertex, "per_vertex"),
+        ] {
+            let plan = plan.with_hinges(hinges);
+            let mut cpu = CpuSolver::new(&model, params, &plan);
+            let id = BenchmarkId::new(format!("cpu/{way}"), format!("{n}x{n}"));
+            group.bench_function(id, |b| b.iter(|| cpu.advance(&steps).unwrap()));
+            if let Some(ctx) = &ctx {
+                let mut gpu =
+                    GpuSolver::new(ctx, &model, params, &plan, SUBSTEP_BATCH as usize).unwrap();
+                let id = BenchmarkId::new(format!("gpu/{way}"), format!("{n}x{n}"));
+                group.bench_function(id, |b| {
+                    b.iter_custom(|iters| {
+                        let start = Instant::now();
+                        for _ in 0..iters {
+                            gpu.advance(&steps).unwrap();
+                            gpu.finish().unwrap();
+                        }
+                        start.elapsed()
+                    })
+                });
+            }
         }
     }
     group.finish();

@@ -13,13 +13,6 @@ fn texel(i: u32) -> vec2<u32> {
     return vec2<u32>(i % TEXELS_PER_ROW, i / TEXELS_PER_ROW);
 }
 
-// Where hinge_forces keeps hinge h's force on its vertex `role`: hinges run along a row, and
-// each row of 2048 hinges takes four texture rows, one per role, so that neighbouring threads
-// write neighbouring texels.
-fn hinge_force_texel(h: u32, role: u32) -> vec2<u32> {
-    return vec2<u32>(h % TEXELS_PER_ROW, 4u * (h / TEXELS_PER_ROW) + role);
-}
-
 // Values that stay constant for a whole run.
 struct SimParams {
     gravity: vec4<f32>,          // xyz: m/s², w: unused

@@ -1,13 +1,14 @@
 // Dihedral bending (Bridson, Marino & Fedkiw 2003), each hinge evaluated once: one thread per
-// hinge writes its forces on its four vertices to texels 4·h + role, the same numbers the
-// particles' hinge refs (h·4 + role) point at, so a particle gathers its share by reading the
-// texel its ref names. CPU twin: src/cpu/hinge_forces.rs.
+// hinge writes its forces on its four vertices to the CSR slots of their hinge refs, so that
+// integrate reads each particle's bending forces as one contiguous run of texels, in CSR order.
+// CPU twin: src/cpu/hinge_forces.rs (which keeps them in ref order and gathers through the refs).
 
 @group(0) @binding(0) var<uniform> params: SimParams;
 @group(0) @binding(1) var pos: texture_2d<f32>;
 @group(0) @binding(2) var hinge_offsets: texture_2d<u32>;     // r32uint, N + 1 entries
 @group(0) @binding(3) var hinges: texture_2d<u32>;            // two texels per Hinge
-@group(0) @binding(4) var hinge_forces: texture_storage_2d<rgba32float, write>; // four per hinge
+@group(0) @binding(4) var hinge_slots: texture_2d<u32>;       // per hinge: its roles' CSR slots
+@group(0) @binding(5) var hinge_forces: texture_storage_2d<rgba32float, write>; // one per slot
 
 fn position(i: u32) -> vec3<f32> {
     return textureLoad(pos, texel(i), 0).xyz;
@@ -34,8 +35,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         f2 = c * (t.e_len * t.a);
         f3 = c * (t.e_len * t.b);
     }
-    textureStore(hinge_forces, hinge_force_texel(h, 0u), vec4<f32>(f0, 0.0));
-    textureStore(hinge_forces, hinge_force_texel(h, 1u), vec4<f32>(f1, 0.0));
-    textureStore(hinge_forces, hinge_force_texel(h, 2u), vec4<f32>(f2, 0.0));
-    textureStore(hinge_forces, hinge_force_texel(h, 3u), vec4<f32>(f3, 0.0));
+    let slot = textureLoad(hinge_slots, texel(h), 0);
+    textureStore(hinge_forces, texel(slot.x), vec4<f32>(f0, 0.0));
+    textureStore(hinge_forces, texel(slot.y), vec4<f32>(f1, 0.0));
+    textureStore(hinge_forces, texel(slot.z), vec4<f32>(f2, 0.0));
+    textureStore(hinge_forces, texel(slot.w), vec4<f32>(f3, 0.0));
 }

@@ -1,6 +1,6 @@
 // Euler integration of every free particle. Reads this substep's state and the forces the force
-// stages summed, adds the bending forces hinge_forces wrote for the particle (gathered through
-// its hinge refs in CSR order, when the scene bends), and writes the next state into the other
+// stages summed, adds the bending forces hinge_forces wrote for the particle (a contiguous run
+// of texels in CSR order, when the scene bends), and writes the next state into the other
 // texture of each ping-pong pair. Gathering here rather than in a stage of its own saves a
 // dispatch and a round trip of the force texture.
 // pos.w holds the inverse mass: 0 pins the particle. CPU twin: src/cpu/integrate.rs.
@@ -13,8 +13,7 @@
 @group(0) @binding(5) var vel_out: texture_storage_2d<rgba32float, write>;
 // section bending
 @group(0) @binding(6) var hinge_offsets: texture_2d<u32>;     // r32uint, N + 1 entries
-@group(0) @binding(7) var hinge_refs: texture_2d<u32>;        // r32uint: hinge index * 4 + role
-@group(0) @binding(8) var hinge_forces: texture_2d<f32>;      // hinge_force_texel(h, role)
+@group(0) @binding(7) var hinge_forces: texture_2d<f32>;      // one per hinge ref, CSR order
 // end bending
 
 // The particle's bending force: the sum of what hinge_forces wrote for it.
@@ -24,8 +23,7 @@ fn bending_force(i: u32) -> vec3<f32> {
     let first = textureLoad(hinge_offsets, texel(i), 0).x;
     let end = textureLoad(hinge_offsets, texel(i + 1u), 0).x;
     for (var k = first; k < end; k = k + 1u) {
-        let r = textureLoad(hinge_refs, texel(k), 0).x;
-        f = f + textureLoad(hinge_forces, hinge_force_texel(r / 4u, r % 4u), 0).xyz;
+        f = f + textureLoad(hinge_forces, texel(k), 0).xyz;
     }
     // end bending
     return f;

@@ -84,8 +84,8 @@ fn plan_json_lists_the_stages() {
     assert_eq!(
         plan["passes"],
         serde_json::json!([
-            "hinge_forces",
             "spring_forces",
+            "bending_forces",
             "wind_forces",
             "integrate",
             "strain_limit"

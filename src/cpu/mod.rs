@@ -7,6 +7,7 @@
 //! on the caller's rayon pool (`--threads`). The spatial-hash build (a scatter) and the
 //! point–triangle self-collision reference (Gauss–Seidel) stay serial.
 
+mod bending_forces;
 mod collide_body;
 mod hash_clear;
 mod hash_count;
@@ -24,6 +25,7 @@ mod vbd_init;
 mod vbd_solve;
 mod wind_forces;
 
+pub use bending_forces::bending_forces;
 pub use collide_body::{collide_body, collide_edge, collide_edges, collide_particle};
 pub use hash_clear::hash_clear;
 pub use hash_count::{hash_bucket, hash_cell_of, hash_count};
@@ -44,7 +46,7 @@ pub use wind_forces::wind_forces;
 use crate::error::Error;
 use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep};
 use crate::model::{ClothModel, Csr};
-use crate::plan::{Pass, PassPlan};
+use crate::plan::{HingeEvaluation, Pass, PassPlan};
 use crate::solver::{relative_residual, AdapterReport, ParticleState, Solver};
 use glam::{Vec2, Vec4};
 use rayon::prelude::*;
@@ -61,6 +63,8 @@ pub struct CpuSolver {
     pub force: Vec<Vec4>,
     springs: Option<Csr<SpringRef>>,
     hinges: Option<Hinges>,
+    /// The hinges and each particle's hinge refs, for `bending_forces` (per vertex).
+    vertex_hinges: Option<(Vec<Hinge>, Csr<u32>)>,
     triangles: Option<(Vec<[u32; 4]>, Csr<u32>)>,
     seams: Option<(Vec<Seam>, Csr<u32>)>,
     collider: Option<std::sync::Arc<crate::body::Collider>>,
@@ -121,8 +125,14 @@ pub struct SpatialHash {
 }
 
 impl CpuSolver {
-    /// A CPU solver for `model` running `plan`.
+    /// How the CPU evaluates hinges unless the plan says otherwise: once per hinge, measured
+    /// faster here than once per vertex (README, "Benchmarks").
+    pub const HINGES: HingeEvaluation = HingeEvaluation::Once;
+
+    /// A CPU solver for `model` running `plan` (with hinges as `HINGES` if the plan leaves it
+    /// open).
     pub fn new(model: &ClothModel, params: SimParams, plan: &PassPlan) -> Self {
+        let plan = &plan.for_backend(Self::HINGES);
         let n = model.len();
         CpuSolver {
             params,
@@ -138,6 +148,9 @@ impl CpuSolver {
                 csr: model.hinge_csr(),
                 forces: vec![Vec4::ZERO; 4 * model.hinges.len()],
             }),
+            vertex_hinges: plan
+                .contains(Pass::BendingForces)
+                .then(|| (model.hinges.clone(), model.hinge_csr())),
             triangles: plan
                 .contains(Pass::WindForces)
                 .then(|| (model.packed_triangles(), model.triangle_csr())),
@@ -233,6 +246,20 @@ impl CpuSolver {
                     .as_mut()
                     .expect("hinge_forces is not in the plan");
                 hinge_forces(&self.pos, &h.hinges, &mut h.forces);
+            }
+            Pass::BendingForces => {
+                let (hinges, csr) = self
+                    .vertex_hinges
+                    .as_ref()
+                    .expect("bending_forces is not in the plan");
+                bending_forces(
+                    p,
+                    &self.pos,
+                    &mut self.force,
+                    &csr.offsets,
+                    &csr.items,
+                    hinges,
+                );
             }
             Pass::WindForces => {
                 let (tris, csr) = self

@@ -4,7 +4,6 @@
 use super::solver::GpuSolver;
 use super::texels::TexelArray;
 use crate::error::Error;
-use crate::model::layout::TEXELS_PER_ROW;
 use glam::Vec4;
 
 /// Counts, starts and sorted particle indices of the spatial hash, as read back.
@@ -110,16 +109,14 @@ impl GpuSolver {
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         h.copy_to_buffer(&mut encoder, &staging, 0);
         self.ctx.queue.submit([encoder.finish()]);
-        // Back from `hinge_force_texel`'s rows to the refs' order, 4·h + role.
-        let row = TEXELS_PER_ROW as usize;
+        // Back from CSR order (texel k holds ref hinge_refs[k]) to ref order, 4·h + role.
         self.map_read(staging.slice(..), |bytes| {
             let texels: &[Vec4] = bytemuck::cast_slice(bytes);
-            (0..4 * self.hinges)
-                .map(|r| {
-                    let h = r / 4;
-                    texels[(4 * (h / row) + r % 4) * row + h % row]
-                })
-                .collect()
+            let mut forces = vec![Vec4::ZERO; self.hinge_refs.len()];
+            for (k, &r) in self.hinge_refs.iter().enumerate() {
+                forces[r as usize] = texels[k];
+            }
+            forces
         })
     }
 

@@ -11,9 +11,9 @@ use super::kernels::{compose_with, ForceInput, VbdEnergies};
 use super::pipelines::{build_stage, Binding, Stage};
 use super::texels::TexelArray;
 use crate::error::Error;
-use crate::model::layout::{SimParams, SubstepParams, Sweep, TEXELS_PER_ROW, WORKGROUP_SIZE};
+use crate::model::layout::{SimParams, SubstepParams, Sweep, WORKGROUP_SIZE};
 use crate::model::ClothModel;
-use crate::plan::{Pass, PassPlan};
+use crate::plan::{HingeEvaluation, Pass, PassPlan};
 use crate::solver::{AdapterReport, ParticleState, Solver};
 use glam::Vec4;
 use wgpu::util::DeviceExt;
@@ -53,15 +53,16 @@ pub struct GpuSolver {
     pub(super) pos: [TexelArray; 2],
     pub(super) vel: [TexelArray; 2],
     pub(super) forces: Vec<TexelArray>,
-    /// What `hinge_forces` writes and the gather reads: four texels per hinge.
+    /// What `hinge_forces` writes and `integrate` gathers: four texels per hinge, in CSR order.
     pub(super) hinge_forces: Option<TexelArray>,
     /// Which of `pos`/`vel` holds the current state.
     pub(super) current: usize,
     /// Which of `forces` the last force stage wrote.
     pub(super) last_forces: usize,
     pub(super) n: usize,
-    /// Hinges in the model.
-    pub(super) hinges: usize,
+    /// Each particle's hinge refs in CSR order (the order `hinge_forces` writes in), for
+    /// reading its forces back.
+    pub(super) hinge_refs: Vec<u32>,
     pub(super) staging: wgpu::Buffer,
     pub(super) substeps: Option<SubstepBuffer>,
     pub(super) stages: Vec<Stage>,
@@ -73,8 +74,13 @@ pub struct GpuSolver {
 }
 
 impl GpuSolver {
-    /// Uploads `model` and builds the pipelines of `plan`. `max_batch` is the most substeps one
-    /// `advance` call submits at once (longer calls are split into batches of that size).
+    /// How the GPU evaluates hinges unless the plan says otherwise: once per vertex, measured
+    /// faster on lavapipe than once per hinge (README, "Benchmarks"; unmeasured on real GPUs).
+    pub const HINGES: HingeEvaluation = HingeEvaluation::PerVertex;
+
+    /// Uploads `model` and builds the pipelines of `plan` (with hinges as `HINGES` if the plan
+    /// leaves it open). `max_batch` is the most substeps one `advance` call submits at once
+    /// (longer calls are split into batches of that size).
     pub fn new(
         ctx: &GpuContext,
         model: &ClothModel,
@@ -82,6 +88,7 @@ impl GpuSolver {
         plan: &PassPlan,
         max_batch: usize,
     ) -> Result<Self, Error> {
+        let plan = &plan.for_backend(Self::HINGES);
         let n = model.len();
         let state_usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC;
         let mut labels = vec!["params", "positions", "velocities", "forces", "staging"];
@@ -114,9 +121,7 @@ impl GpuSolver {
         let hinge_forces = match plan.contains(Pass::HingeForces) {
             true => {
                 labels.push("hinge_forces");
-                // Four texture rows per row of hinges (`hinge_force_texel` in common.wgsl).
-                let row = TEXELS_PER_ROW as usize;
-                let len = 4 * model.hinges.len().div_ceil(row) * row;
+                let len = 4 * model.hinges.len();
                 Some(TexelArray::new(
                     ctx,
                     "hinge_forces",
@@ -299,6 +304,7 @@ impl GpuSolver {
                         Binding::Read(&pos[p]),
                         o(0),
                         o(1),
+                        o(2),
                         Binding::Write(per_hinge()),
                     ],
                     Pass::SpringForces => vec![
@@ -308,6 +314,14 @@ impl GpuSolver {
                         out(),
                         o(0),
                         o(1),
+                    ],
+                    Pass::BendingForces => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Read(&pos[p]),
+                        out(),
+                        o(0),
+                        o(1),
+                        o(2),
                     ],
                     Pass::WindForces => vec![
                         Binding::Uniform(&params_buf),
@@ -440,8 +454,8 @@ impl GpuSolver {
                             Binding::Write(&vel[1 - p]),
                         ];
                         list.extend(match hinge_forces.is_some() {
-                            true => [o(0), o(1), Binding::Read(per_hinge())],
-                            false => [Binding::Gap; 3],
+                            true => [o(0), Binding::Read(per_hinge())],
+                            false => [Binding::Gap; 2],
                         });
                         list
                     }
@@ -490,7 +504,10 @@ impl GpuSolver {
             current: 0,
             last_forces: 0,
             n,
-            hinges: model.hinges.len(),
+            hinge_refs: match plan.contains(Pass::HingeForces) {
+                true => model.hinge_csr().items,
+                false => Vec::new(),
+            },
             staging,
             substeps,
             stages,
@@ -601,10 +618,11 @@ impl Solver for GpuSolver {
 enum Elements {
     Springs,
     Hinges,
-    /// Hinge offsets and the hinges (for `hinge_forces`: the offsets' total counts them).
-    HingeList,
-    /// Hinge offsets and refs (for the gather).
-    HingeRefs,
+    /// Hinge offsets (their total counts the hinges), the hinges and their slots (for
+    /// `hinge_forces`).
+    HingeSlots,
+    /// Hinge offsets (for `integrate`'s gather).
+    HingeOffsets,
     Seams,
     Triangles,
     SelfNeighbours,
@@ -614,7 +632,8 @@ enum Elements {
 fn stage_elements(pass: Pass, energies: VbdEnergies) -> Vec<Elements> {
     match pass {
         Pass::SpringForces | Pass::StrainLimit | Pass::Monitor => vec![Elements::Springs],
-        Pass::HingeForces => vec![Elements::HingeList],
+        Pass::HingeForces => vec![Elements::HingeSlots],
+        Pass::BendingForces => vec![Elements::Hinges],
         Pass::WindForces => vec![Elements::Triangles],
         Pass::SeamForces => vec![Elements::Seams],
         Pass::SelfCollide => vec![Elements::SelfNeighbours],
@@ -633,7 +652,7 @@ fn stage_elements(pass: Pass, energies: VbdEnergies) -> Vec<Elements> {
             kinds
         }
         // `integrate` gathers the bending forces when the plan evaluates hinges.
-        Pass::Integrate if energies.bending => vec![Elements::HingeRefs],
+        Pass::Integrate if energies.bending => vec![Elements::HingeOffsets],
         Pass::HashClear
         | Pass::HashCount
         | Pass::HashScan
@@ -642,6 +661,18 @@ fn stage_elements(pass: Pass, energies: VbdEnergies) -> Vec<Elements> {
         | Pass::VbdFinish
         | Pass::Integrate => vec![],
     }
+}
+
+/// Where each hinge's four forces go on the GPU: the CSR slots of its refs, `[u32; 4]` per
+/// hinge. `hinge_forces` scatters to them and `integrate` then reads each particle's bending
+/// forces as one contiguous run of texels, in CSR order (the CPU twin keeps the forces in ref
+/// order, `4·h + role`, and gathers through the refs: the same numbers, the same sum order).
+pub(super) fn hinge_slots(refs: &[u32]) -> Vec<u32> {
+    let mut slots = vec![0u32; refs.len()];
+    for (k, &r) in refs.iter().enumerate() {
+        slots[r as usize] = k as u32;
+    }
+    slots
 }
 
 /// The texel arrays of one kind of element: (label, texel format, bytes).
@@ -662,28 +693,33 @@ fn element_arrays(
                 (items, Rgba32Uint, bytes(bytemuck::cast_slice(&csr.items))),
             ]
         }
-        Elements::HingeList | Elements::HingeRefs => {
+        Elements::HingeSlots => {
             let csr = model.hinge_csr();
-            let second = match kind {
-                Elements::HingeList => (
-                    "hinges",
-                    Rgba32Uint,
-                    bytes(bytemuck::cast_slice(&model.hinges)),
-                ),
-                _ => (
-                    "hinge_refs",
-                    R32Uint,
-                    bytes(bytemuck::cast_slice(&csr.items)),
-                ),
-            };
             vec![
                 (
                     "hinge_offsets",
                     R32Uint,
                     bytes(bytemuck::cast_slice(&csr.offsets)),
                 ),
-                second,
+                (
+                    "hinges",
+                    Rgba32Uint,
+                    bytes(bytemuck::cast_slice(&model.hinges)),
+                ),
+                (
+                    "hinge_slots",
+                    Rgba32Uint,
+                    bytes(bytemuck::cast_slice(&hinge_slots(&csr.items))),
+                ),
             ]
+        }
+        Elements::HingeOffsets => {
+            let csr = model.hinge_csr();
+            vec![(
+                "hinge_offsets",
+                R32Uint,
+                bytes(bytemuck::cast_slice(&csr.offsets)),
+            )]
         }
         Elements::Hinges => {
             let csr = model.hinge_csr();
