@@ -1,5 +1,6 @@
 //! Criterion benches: every pass, CPU path against GPU path, at three sizes, on shipped scenes
 //! that have the pass (the benchmark cloth alone has no body, seams, wind or self-collision).
+//! Both ways of evaluating hinges are measured on both backends (`HingeEvaluation`).
 //! Throughput is in particle-substeps. GPU batches are one submission, timed to completion.
 //! `WGPU_ADAPTER_NAME` picks the adapter (default: wgpu's choice, e.g. lavapipe on CI
 //! machines). A filter runs a subset: `cargo bench --bench passes -- vbd_solve/cpu`.
@@ -12,7 +13,7 @@ use common::{cpu_solver, first_substeps, gpu_context, gpu_solver, prepared, time
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use drapekit::bench::{bench_model, bench_steps};
 use drapekit::model::layout::INTEGRATOR_IMPLICIT;
-use drapekit::plan::Pass;
+use drapekit::plan::{HingeEvaluation, Pass};
 use drapekit::scene::{ClothSource, Scene, SelfCollision};
 use drapekit::sim::Prepared;
 use drapekit::solver::Solver;
@@ -38,6 +39,8 @@ struct Fixture {
     resize: Resize,
     /// Further changes (integrator, self-collision).
     edit: fn(&mut Scene),
+    /// How hinges are evaluated, where the fixture fixes it (`None`: as each backend prefers).
+    hinges: Option<HingeEvaluation>,
 }
 
 /// How a fixture scene takes size index 0, 1 or 2.
@@ -76,7 +79,7 @@ fn self_collision(scene: &mut Scene) {
     });
 }
 
-const FIXTURES: [Fixture; 6] = [
+const FIXTURES: [Fixture; 7] = [
     Fixture {
         scene: "hanging_cloth.toml",
         label: "hanging_cloth",
@@ -89,6 +92,16 @@ const FIXTURES: [Fixture; 6] = [
         ],
         resize: Resize::Grid,
         edit: unchanged,
+        hinges: Some(HingeEvaluation::PerVertex),
+    },
+    Fixture {
+        scene: "hanging_cloth.toml",
+        label: "hanging_cloth_once",
+        // `integrate` here also gathers the forces `hinge_forces` wrote.
+        passes: &[Pass::HingeForces, Pass::Integrate],
+        resize: Resize::Grid,
+        edit: unchanged,
+        hinges: Some(HingeEvaluation::Once),
     },
     Fixture {
         scene: "hanging_cloth.toml",
@@ -96,6 +109,7 @@ const FIXTURES: [Fixture; 6] = [
         passes: &[Pass::VbdInit, Pass::VbdSolve, Pass::VbdFinish],
         resize: Resize::Grid,
         edit: implicit,
+        hinges: None,
     },
     Fixture {
         scene: "flag_wind.toml",
@@ -103,6 +117,7 @@ const FIXTURES: [Fixture; 6] = [
         passes: &[Pass::WindForces],
         resize: Resize::Grid,
         edit: unchanged,
+        hinges: None,
     },
     Fixture {
         scene: "drape_sphere.toml",
@@ -110,6 +125,7 @@ const FIXTURES: [Fixture; 6] = [
         passes: &[Pass::CollideBody],
         resize: Resize::Grid,
         edit: unchanged,
+        hinges: None,
     },
     Fixture {
         scene: "drape_sphere.toml",
@@ -123,6 +139,7 @@ const FIXTURES: [Fixture; 6] = [
         ],
         resize: Resize::Grid,
         edit: self_collision,
+        hinges: None,
     },
     Fixture {
         scene: "skirt_sew.toml",
@@ -130,16 +147,21 @@ const FIXTURES: [Fixture; 6] = [
         passes: &[Pass::SeamForces],
         resize: Resize::Spacing,
         edit: unchanged,
+        hinges: None,
     },
 ];
 
 /// The fixture at size `size`. Its solvers are advanced by one output frame (the GPU's by
 /// one batch) before timing, so that the passes see a moving cloth rather than the rest state.
 fn fixture_at(f: &Fixture, size: usize) -> Prepared {
-    prepared(f.scene, |s| {
+    let mut prep = prepared(f.scene, |s| {
         resize(s, f.resize, size);
         (f.edit)(s);
-    })
+    });
+    if let Some(how) = f.hinges {
+        prep.plan = prep.plan.with_hinges(how);
+    }
+    prep
 }
 
 fn size_label(f: &Fixture, size: usize, particles: usize) -> String {
@@ -169,6 +191,9 @@ fn prerequisites(pass: Pass) -> &'static [Pass] {
     }
 }
 
+/// Each pass of the bench cloth alone (the passes of both ways of evaluating hinges: per vertex,
+/// `bending_forces`, and once per hinge, `hinge_forces` with `integrate` gathering), on both
+/// backends, so that each way is measured on each.
 fn per_pass(c: &mut Criterion) {
     let ctx = gpu_context();
     for f in &FIXTURES {
@@ -261,8 +286,8 @@ fn per_pass(c: &mut Criterion) {
     }
 }
 
-/// A whole substep of the benchmark cloth (`drapekit bench`'s model: springs, bending,
-/// integrate), 100 substeps per batch: the README's figure.
+/// Whole substeps, each way of evaluating hinges on each backend (`cpu/once` and
+/// `gpu/per_vertex` are what the backends run by default).
 fn whole_substep(c: &mut Criterion) {
     let ctx = gpu_context();
     let mut group = c.benchmark_group("substep");
@@ -275,22 +300,33 @@ fn whole_substep(c: &mut Criterion) {
         group.throughput(Throughput::Elements(
             model.len() as u64 * SUBSTEP_BATCH as u64,
         ));
-        let mut cpu = drapekit::cpu::CpuSolver::new(&model, params, &plan);
-        group.bench_function(BenchmarkId::new("cpu", format!("{n}x{n}")), |b| {
-            b.iter(|| cpu.advance(&steps).unwrap())
-        });
-        if let Some(ctx) = &ctx {
-            let mut gpu =
-                drapekit::gpu::GpuSolver::new(ctx, &model, params, &plan, SUBSTEP_BATCH as usize)
-                    .unwrap();
-            group.bench_function(BenchmarkId::new("gpu", format!("{n}x{n}")), |b| {
-                b.iter_custom(|iters| {
-                    timed(iters, || {
-                        gpu.advance(&steps).unwrap();
-                        gpu.finish().unwrap();
+        for (hinges, way) in [
+            (HingeEvaluation::Once, "once"),
+            (HingeEvaluation::PerVertex, "per_vertex"),
+        ] {
+            let plan = plan.with_hinges(hinges);
+            let mut cpu = drapekit::cpu::CpuSolver::new(&model, params, &plan);
+            let id = BenchmarkId::new(format!("cpu/{way}"), format!("{n}x{n}"));
+            group.bench_function(id, |b| b.iter(|| cpu.advance(&steps).unwrap()));
+            if let Some(ctx) = &ctx {
+                let mut gpu = drapekit::gpu::GpuSolver::new(
+                    ctx,
+                    &model,
+                    params,
+                    &plan,
+                    SUBSTEP_BATCH as usize,
+                )
+                .unwrap();
+                let id = BenchmarkId::new(format!("gpu/{way}"), format!("{n}x{n}"));
+                group.bench_function(id, |b| {
+                    b.iter_custom(|iters| {
+                        timed(iters, || {
+                            gpu.advance(&steps).unwrap();
+                            gpu.finish().unwrap();
+                        })
                     })
-                })
-            });
+                });
+            }
         }
     }
     group.finish();

@@ -1,6 +1,7 @@
 // Dihedral bending (Bridson, Marino & Fedkiw 2003), gathered per particle: a particle visits each
-// hinge it belongs to and takes its own share, so each hinge is evaluated four times.
-// CPU twin: src/cpu/bending_forces.rs.
+// hinge it belongs to and takes its own share, so each hinge is evaluated four times. On lavapipe
+// this runs faster than hinge_forces (each hinge once) followed by integrate's gather, so the
+// GPU backend takes it (README, "Benchmarks"). CPU twin: src/cpu/bending_forces.rs.
 
 @group(0) @binding(0) var<uniform> params: SimParams;
 @group(0) @binding(1) var pos: texture_2d<f32>;
@@ -13,7 +14,7 @@ fn position(i: u32) -> vec3<f32> {
     return textureLoad(pos, texel(i), 0).xyz;
 }
 
-// Force on vertex `role` of hinge h (hinge_terms in common.wgsl).
+// Force on vertex `role` of hinge h (hinge_terms in common.wgsl; CPU: cpu::hinge_force).
 fn hinge_force(h: Hinge, role: u32) -> vec3<f32> {
     let t = hinge_terms(h.stiffness, position(h.v.x), position(h.v.y), position(h.v.z), position(h.v.w), role);
     if (!t.valid) {

@@ -134,19 +134,26 @@ fn safe_normalize(v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(0.0);
 }
 
-// The terms of a dihedral hinge's force on vertex `role` (Bridson, Marino & Fedkiw 2003): the
-// force is weight·(sin(θ/2) − sin(θ0/2))·u. Roles 0, 1: the shared edge x3, x4; roles 2, 3: the
-// opposite vertices x1, x2. A degenerate hinge (no defined angle) is not valid.
-// CPU twin: cpu::bending_forces::hinge_geometry.
-struct HingeTerms {
-    u: vec3<f32>,
-    weight: f32,
-    sin_half: f32,
+// A dihedral hinge's shared terms (Bridson, Marino & Fedkiw 2003): its force on vertex `role` is
+// weight·(sin(θ/2) − sin(θ0/2))·u_role, u from hinge_direction. Roles 0, 1: the shared edge x3,
+// x4; roles 2, 3: the opposite vertices x1, x2. A degenerate hinge (no defined angle) is not
+// valid. CPU twin: cpu::hinge_forces::hinge_frame.
+struct HingeFrame {
+    x1: vec3<f32>,
+    x2: vec3<f32>,
+    x3: vec3<f32>,
+    x4: vec3<f32>,
+    e_hat: vec3<f32>,
+    e_len: f32,
+    a: vec3<f32>,                // n1 / |n1|²
+    b: vec3<f32>,                // n2 / |n2|²
+    weight: f32,                 // stiffness·|e|²/(|n1| + |n2|)
+    sin_half: f32,               // sin(θ/2) of the signed dihedral angle
     valid: bool,
 }
 
-fn hinge_terms(stiffness: f32, x3: vec3<f32>, x4: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, role: u32) -> HingeTerms {
-    var t = HingeTerms(vec3<f32>(0.0), 0.0, 0.0, false);
+fn hinge_frame(stiffness: f32, x3: vec3<f32>, x4: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>) -> HingeFrame {
+    var t = HingeFrame(x1, x2, x3, x4, vec3<f32>(0.0), 0.0, vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, false);
     let e = x4 - x3;
     let n1 = cross(x1 - x3, x1 - x4);
     let n2 = cross(x2 - x4, x2 - x3);
@@ -167,16 +174,38 @@ fn hinge_terms(stiffness: f32, x3: vec3<f32>, x4: vec3<f32>, x1: vec3<f32>, x2: 
     }
     t.weight = stiffness * e_len * e_len / (n1_len + n2_len);
     t.sin_half = sin_half;
-    let e_hat = e / e_len;
-    let a = n1 / n1_sq;
-    let b = n2 / n2_sq;
-    switch role {
-        case 0u: { t.u = dot(x1 - x4, e_hat) * a + dot(x2 - x4, e_hat) * b; }
-        case 1u: { t.u = -dot(x1 - x3, e_hat) * a - dot(x2 - x3, e_hat) * b; }
-        case 2u: { t.u = e_len * a; }
-        default: { t.u = e_len * b; }
-    }
+    t.e_hat = e / e_len;
+    t.e_len = e_len;
+    t.a = n1 / n1_sq;
+    t.b = n2 / n2_sq;
     t.valid = true;
+    return t;
+}
+
+// The direction u of vertex `role` (the gradient of θ up to sign).
+fn hinge_direction(t: HingeFrame, role: u32) -> vec3<f32> {
+    switch role {
+        case 0u: { return dot(t.x1 - t.x4, t.e_hat) * t.a + dot(t.x2 - t.x4, t.e_hat) * t.b; }
+        case 1u: { return -dot(t.x1 - t.x3, t.e_hat) * t.a - dot(t.x2 - t.x3, t.e_hat) * t.b; }
+        case 2u: { return t.e_len * t.a; }
+        default: { return t.e_len * t.b; }
+    }
+}
+
+// One vertex's terms of a hinge, for vbd_solve.
+struct HingeTerms {
+    u: vec3<f32>,
+    weight: f32,
+    sin_half: f32,
+    valid: bool,
+}
+
+fn hinge_terms(stiffness: f32, x3: vec3<f32>, x4: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, role: u32) -> HingeTerms {
+    let f = hinge_frame(stiffness, x3, x4, x1, x2);
+    var t = HingeTerms(vec3<f32>(0.0), f.weight, f.sin_half, f.valid);
+    if (f.valid) {
+        t.u = hinge_direction(f, role);
+    }
     return t;
 }
 

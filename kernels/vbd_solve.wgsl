@@ -77,7 +77,7 @@ fn add_springs(i: u32, xi: vec3<f32>, f: ptr<function, vec3<f32>>, hs: ptr<funct
 @group(0) @binding(11) var hinge_refs: texture_2d<u32>;        // r32uint: hinge index * 4 + role
 @group(0) @binding(12) var hinges: texture_2d<u32>;            // two texels per Hinge
 
-// The bending force on vertex `role` of h at the iterate (as bending_forces.wgsl) plus its
+// The bending force on vertex `role` of h at the iterate (as hinge_forces.wgsl) plus its
 // Gauss–Newton Hessian ½cos(θ/2)·weight·uuᵀ.
 fn add_hinge(hinge: Hinge, role: u32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {
     let t = hinge_terms(hinge.stiffness, x[hinge.v.x].xyz, x[hinge.v.y].xyz, x[hinge.v.z].xyz, x[hinge.v.w].xyz, role);

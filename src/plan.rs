@@ -9,9 +9,13 @@ use serde::Serialize;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Pass {
+    /// Dihedral bending, each hinge evaluated once: its forces on its four vertices, which
+    /// `integrate` gathers per particle.
+    HingeForces,
     /// Stretch springs on mesh edges.
     SpringForces,
-    /// Dihedral bending on interior edges.
+    /// Dihedral bending, each hinge evaluated from each of its four vertices (the other way to
+    /// evaluate hinges; see `HingeEvaluation`).
     BendingForces,
     /// Per-triangle wind drag.
     WindForces,
@@ -24,7 +28,8 @@ pub enum Pass {
     VbdSolve,
     /// Implicit Euler 3/3: v = (x − xₙ)/h, the next state.
     VbdFinish,
-    /// Euler integration; after every force stage.
+    /// Euler integration; after every force stage. Gathers the bending forces `hinge_forces`
+    /// wrote.
     Integrate,
     /// Jacobi projection of over-stretched edges back to the strain limit (positions, and
     /// velocities by the same displacement over the step); after the step, before collisions.
@@ -48,7 +53,8 @@ pub enum Pass {
 
 impl Pass {
     /// Every stage, in execution order.
-    pub const ALL: [Pass; 16] = [
+    pub const ALL: [Pass; 17] = [
+        Pass::HingeForces,
         Pass::SpringForces,
         Pass::BendingForces,
         Pass::WindForces,
@@ -70,6 +76,7 @@ impl Pass {
     /// The stage name shared by the kernel file, the CPU twin, tests and bench ids.
     pub fn name(self) -> &'static str {
         match self {
+            Pass::HingeForces => "hinge_forces",
             Pass::SpringForces => "spring_forces",
             Pass::BendingForces => "bending_forces",
             Pass::WindForces => "wind_forces",
@@ -117,6 +124,7 @@ impl Pass {
     /// The stage's WGSL source, without `common.wgsl`.
     pub fn kernel_source(self) -> &'static str {
         match self {
+            Pass::HingeForces => include_str!("../kernels/hinge_forces.wgsl"),
             Pass::SpringForces => include_str!("../kernels/spring_forces.wgsl"),
             Pass::BendingForces => include_str!("../kernels/bending_forces.wgsl"),
             Pass::WindForces => include_str!("../kernels/wind_forces.wgsl"),
@@ -137,20 +145,39 @@ impl Pass {
     }
 }
 
+/// How the plan evaluates dihedral hinges. Both ways exist on both backends (a kernel and its
+/// CPU twin each, with parity tests); each backend takes the one measured faster on it (README,
+/// "Benchmarks"), and the results agree to rounding (bit for bit on the CPU when bending is the
+/// only force after the springs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HingeEvaluation {
+    /// `bending_forces`: each particle evaluates every hinge it belongs to and keeps its own
+    /// share, four evaluations per hinge. Faster on lavapipe.
+    PerVertex,
+    /// `hinge_forces` evaluates each hinge once into four forces, and `integrate` gathers each
+    /// particle's share. Faster on the CPU.
+    Once,
+}
+
 /// The ordered passes of one substep.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PassPlan {
     /// Stages in execution order.
     pub passes: Vec<Pass>,
+    /// How hinges are evaluated when the plan bends; `None`: as the backend prefers.
+    pub hinges: Option<HingeEvaluation>,
 }
 
 impl PassPlan {
-    /// The plan for a model and the effects its scene asks for.
+    /// The plan for a model and the effects its scene asks for. Bending is listed as
+    /// `bending_forces`; each backend may evaluate it its own way (`for_backend`).
     pub fn new(model: &ClothModel, effects: Effects) -> Self {
         let wanted = |pass: &Pass| match pass {
             // Implicit Euler evaluates springs, hinges and seams inside its solve.
             Pass::SpringForces => !effects.implicit && !model.springs.is_empty(),
             Pass::BendingForces => !effects.implicit && effects.bending && !model.hinges.is_empty(),
+            Pass::HingeForces => false,
             Pass::WindForces => effects.wind && !model.triangles.is_empty(),
             Pass::SeamForces => !effects.implicit && !model.seams.is_empty(),
             Pass::VbdInit | Pass::VbdSolve | Pass::VbdFinish => effects.implicit,
@@ -166,7 +193,28 @@ impl PassPlan {
         };
         PassPlan {
             passes: Pass::ALL.into_iter().filter(wanted).collect(),
+            hinges: None,
         }
+    }
+
+    /// The plan with hinges evaluated `how` (the stages in their canonical order).
+    pub fn with_hinges(&self, how: HingeEvaluation) -> Self {
+        let bends = self.contains(Pass::BendingForces) || self.contains(Pass::HingeForces);
+        let want = |p: Pass| match p {
+            Pass::BendingForces => bends && how == HingeEvaluation::PerVertex,
+            Pass::HingeForces => bends && how == HingeEvaluation::Once,
+            _ => self.contains(p),
+        };
+        PassPlan {
+            passes: Pass::ALL.into_iter().filter(|&p| want(p)).collect(),
+            hinges: Some(how),
+        }
+    }
+
+    /// The plan a backend runs: hinges as the plan says, or as the backend `prefers` if the
+    /// plan leaves it open.
+    pub fn for_backend(&self, prefers: HingeEvaluation) -> Self {
+        self.with_hinges(self.hinges.unwrap_or(prefers))
     }
 
     /// Whether the plan runs `pass`.

@@ -384,7 +384,14 @@ fn run_scene_from(
         } else {
             0.0
         },
-        passes: prep.plan.names(),
+        // The stages the backend ran: each evaluates hinges its own way.
+        passes: prep
+            .plan
+            .for_backend(match solver.backend_name() {
+                "cpu" => CpuSolver::HINGES,
+                _ => GpuSolver::HINGES,
+            })
+            .names(),
         max_edge_strain: stats.max_edge_strain,
         last_frame_max_edge_strain: stats.last_edge_strain,
         strain_limit: (prep.plan.contains(crate::plan::Pass::StrainLimit))

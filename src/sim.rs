@@ -133,7 +133,10 @@ impl Prepared {
     pub fn hinges_in_use(&self) -> usize {
         use crate::plan::Pass;
         // Implicit steps evaluate the hinges inside vbd_solve.
-        if self.plan.contains(Pass::BendingForces) || self.plan.contains(Pass::VbdSolve) {
+        if self.plan.contains(Pass::BendingForces)
+            || self.plan.contains(Pass::HingeForces)
+            || self.plan.contains(Pass::VbdSolve)
+        {
             self.model.hinges.len()
         } else {
             0

@@ -2,7 +2,9 @@
 
 mod common;
 
-use drapekit::gpu::kernels::{compose, validate_wgsl, ForceInput, COMMON_WGSL};
+use drapekit::gpu::kernels::{
+    compose, compose_with, validate_wgsl, ForceInput, VbdEnergies, COMMON_WGSL,
+};
 use drapekit::plan::Pass;
 
 #[test]
@@ -12,6 +14,20 @@ fn naga_validates_every_kernel() {
         for input in ForceInput::ALL {
             let label = format!("kernels/{}.wgsl ({input:?})", pass.name());
             if let Err(report) = validate_wgsl(&label, &compose(pass, input)) {
+                panic!("{report}");
+            }
+        }
+    }
+}
+
+#[test]
+fn naga_validates_every_kernel_without_its_optional_sections() {
+    // Sections left out (a scene without bending, seams or a body) must still compose.
+    for pass in Pass::ALL {
+        for energies in VbdEnergies::ALL {
+            let label = format!("kernels/{}.wgsl ({energies:?})", pass.name());
+            let source = compose_with(pass, ForceInput::Zero, energies);
+            if let Err(report) = validate_wgsl(&label, &source) {
                 panic!("{report}");
             }
         }

@@ -6,7 +6,7 @@ use common::{fixture, gpu, max_abs_diff, max_norm, perturbed};
 use drapekit::cpu::CpuSolver;
 use drapekit::gpu::GpuSolver;
 use drapekit::model::layout::{SubstepParams, INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC};
-use drapekit::plan::Pass;
+use drapekit::plan::{HingeEvaluation, Pass};
 use drapekit::scene::Scene;
 use drapekit::sim::{prepare, simulate, substep_params, Prepared, RunStats};
 use drapekit::solver::Solver;
@@ -23,9 +23,14 @@ fn pass_parity(pass: Pass) {
 
 fn pass_parity_in(prep: Prepared, pass: Pass) {
     let Some(ctx) = gpu() else { return };
-    assert!(prep.plan.contains(pass));
-    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
-    let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
+    // Both backends run the same stages (each would otherwise evaluate hinges its own way).
+    let plan = prep.plan.with_hinges(match pass {
+        Pass::BendingForces => HingeEvaluation::PerVertex,
+        _ => HingeEvaluation::Once,
+    });
+    assert!(plan.contains(pass));
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &plan);
+    let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &plan, 1).unwrap();
     // 5 mm and 0.5 m/s perturbations give every spring, hinge and triangle a non-trivial force.
     let state = perturbed(&cpu.state().unwrap(), 7, 5e-3, 0.5);
     cpu.set_state(&state);
@@ -94,6 +99,91 @@ fn parity_bending_forces() {
     pass_parity(Pass::BendingForces);
 }
 
+/// `hinge_forces` alone: each hinge's four forces, compared entry by entry. Each entry is one
+/// evaluation of a few f32 operations whose worst amplification is the cancellation in
+/// sin(θ/2) − sin(θ0/2) of a nearly flat hinge: such a hinge's force is small, so relative to
+/// the largest entry the backends differ by about 1e-6 (the force bound below, 2e-5, leaves
+/// 10× margin). Then `integrate` gathers these entries (`parity_integrate_gathers_bending`).
+#[test]
+fn parity_hinge_forces() {
+    let Some(ctx) = gpu() else { return };
+    let prep = flag();
+    let plan = prep.plan.with_hinges(HingeEvaluation::Once);
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &plan);
+    let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &plan, 1).unwrap();
+    let state = perturbed(&cpu.state().unwrap(), 7, 5e-3, 0.5);
+    cpu.set_state(&state);
+    gpu.set_state(&state);
+    let step: SubstepParams = substep_params(&prep, 3)[5];
+    cpu.run_pass(Pass::HingeForces, &step);
+    gpu.run_passes(&[Pass::HingeForces], &[step]).unwrap();
+    let c = cpu.hinge_forces().unwrap();
+    let g = gpu.hinge_forces().unwrap();
+    assert_eq!(c.len(), 4 * prep.model.hinges.len());
+    let scale = max_norm(c);
+    assert!(scale > 0.0, "hinge_forces produced no force");
+    let diff = max_abs_diff(&g, c);
+    assert!(
+        diff <= 2e-5 * scale,
+        "hinge_forces: max diff {diff} N vs max force {scale} N"
+    );
+}
+
+/// `hinge_forces` then `integrate`, which gathers the hinge forces per particle: velocities
+/// change by dt·f/m. The gathered force may differ by 2e-5 of the largest per-particle bending
+/// force (12 terms, each within the `parity_hinge_forces` bound), so the velocities may differ
+/// by dt·max(1/m)·2e-5·max|f| plus the 4e-7 rounding of `parity_integrate`, and positions by dt
+/// times that plus their own 4e-7.
+#[test]
+fn parity_integrate_gathers_bending() {
+    let Some(ctx) = gpu() else { return };
+    let prep = flag();
+    let plan = prep.plan.with_hinges(HingeEvaluation::Once);
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &plan);
+    let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &plan, 1).unwrap();
+    let state = perturbed(&cpu.state().unwrap(), 7, 5e-3, 0.5);
+    cpu.set_state(&state);
+    gpu.set_state(&state);
+    let step: SubstepParams = substep_params(&prep, 3)[5];
+    for pass in [Pass::HingeForces, Pass::Integrate] {
+        cpu.run_pass(pass, &step);
+        gpu.run_passes(&[pass], &[step]).unwrap();
+    }
+    // The largest bending force on a particle, from the CPU's per-hinge forces.
+    let forces = cpu.hinge_forces().unwrap();
+    let csr = prep.model.hinge_csr();
+    let bending = (0..prep.model.len())
+        .map(|i| {
+            (csr.offsets[i]..csr.offsets[i + 1])
+                .map(|k| forces[csr.items[k as usize] as usize].truncate())
+                .sum::<glam::Vec3>()
+                .length()
+        })
+        .fold(0.0f32, f32::max);
+    assert!(bending > 0.0, "no bending force");
+    let max_inv_mass = state.positions.iter().map(|p| p.w).fold(0.0f32, f32::max);
+    let dt = prep.params.dt;
+    let dv_bound = dt * max_inv_mass * 2e-5 * bending + 4e-7;
+    let dx_bound = dt * dv_bound + 4e-7;
+    // The step must move the velocities by much more than the bound, or it shows nothing.
+    let kick = dt * max_inv_mass * bending;
+    assert!(
+        kick > 100.0 * dv_bound,
+        "bending kick {kick} m/s vs bound {dv_bound}"
+    );
+    let g = gpu.state().unwrap();
+    let dv = max_abs_diff(&g.velocities, &cpu.vel);
+    let dx = max_abs_diff(&g.positions, &cpu.pos);
+    assert!(
+        dv <= dv_bound,
+        "velocities differ by {dv} m/s (bound {dv_bound})"
+    );
+    assert!(
+        dx <= dx_bound,
+        "positions differ by {dx} m (bound {dx_bound})"
+    );
+}
+
 #[test]
 fn parity_wind_forces() {
     pass_parity(Pass::WindForces);
@@ -131,6 +221,33 @@ fn parity_strain_limit() {
 #[test]
 fn parity_integrate() {
     pass_parity(Pass::Integrate);
+}
+
+/// The two ways of evaluating hinges give the same bits on the CPU when bending is the last
+/// force before integrate: each hinge's force on a vertex is the same arithmetic whether
+/// evaluated once or from each vertex, and each particle sums its hinges in the same CSR order.
+/// (With wind or seams the once-per-hinge sum is added after theirs: rounding may then differ.)
+#[test]
+fn hinges_once_and_per_vertex_give_the_same_bits_on_the_cpu() {
+    let mut scene = Scene::load(&fixture("scenes/hanging_cloth.toml")).unwrap();
+    scene.solver.frames = 6;
+    let prep = prepare(&scene).unwrap();
+    let run = |how: HingeEvaluation| {
+        let plan = prep.plan.with_hinges(how);
+        let mut cpu = CpuSolver::new(&prep.model, prep.params, &plan);
+        let mut sub = prep.clone();
+        sub.plan = plan;
+        simulate(&sub, &mut cpu, &mut RunStats::default(), |_, _| Ok(())).unwrap();
+        cpu.state().unwrap()
+    };
+    let (once, per_vertex) = (run(HingeEvaluation::Once), run(HingeEvaluation::PerVertex));
+    assert!(prep.hinges_in_use() > 0);
+    assert!(
+        once.positions != prep.model.packed_positions(),
+        "nothing moved"
+    );
+    assert_eq!(once.positions, per_vertex.positions);
+    assert_eq!(once.velocities, per_vertex.velocities);
 }
 
 /// Runs the hanging cloth for 2 simulated seconds on both backends and compares every frame.

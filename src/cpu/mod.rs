@@ -13,6 +13,7 @@ mod hash_clear;
 mod hash_count;
 mod hash_fill;
 mod hash_scan;
+mod hinge_forces;
 mod integrate;
 mod monitor;
 mod seam_forces;
@@ -24,13 +25,14 @@ mod vbd_init;
 mod vbd_solve;
 mod wind_forces;
 
-pub use bending_forces::{bending_forces, hinge_force};
+pub use bending_forces::bending_forces;
 pub use collide_body::{collide_body, collide_edge, collide_edges, collide_particle};
 pub use hash_clear::hash_clear;
 pub use hash_count::{hash_bucket, hash_cell_of, hash_count};
 pub use hash_fill::hash_fill;
 pub use hash_scan::hash_scan;
-pub use integrate::integrate;
+pub use hinge_forces::{hinge_force, hinge_forces, hinge_frame, HingeFrame};
+pub use integrate::{integrate, HingeGather};
 pub use monitor::monitor;
 pub use seam_forces::{rest_gap, seam_force, seam_forces};
 pub use self_collide::{point_triangle_impulses, self_collide};
@@ -44,7 +46,7 @@ pub use wind_forces::wind_forces;
 use crate::error::Error;
 use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep};
 use crate::model::{ClothModel, Csr};
-use crate::plan::{Pass, PassPlan};
+use crate::plan::{HingeEvaluation, Pass, PassPlan};
 use crate::solver::{relative_residual, AdapterReport, ParticleState, SolveProgress, Solver};
 use glam::Vec4;
 use rayon::prelude::*;
@@ -60,7 +62,9 @@ pub struct CpuSolver {
     /// Force accumulator, cleared by `integrate`.
     pub force: Vec<Vec4>,
     springs: Option<Csr<SpringRef>>,
-    hinges: Option<(Vec<Hinge>, Csr<u32>)>,
+    hinges: Option<Hinges>,
+    /// The hinges and each particle's hinge refs, for `bending_forces` (per vertex).
+    vertex_hinges: Option<(Vec<Hinge>, Csr<u32>)>,
     triangles: Option<(Vec<[u32; 4]>, Csr<u32>)>,
     seams: Option<(Vec<Seam>, Csr<u32>)>,
     collider: Option<std::sync::Arc<crate::body::Collider>>,
@@ -78,6 +82,14 @@ pub struct CpuSolver {
     monitor_springs: Csr<SpringRef>,
     /// Strain limiting's springs and its Jacobi scratch pair (positions, velocities).
     strain: Option<(Csr<SpringRef>, Vec<Vec4>, Vec<Vec4>)>,
+}
+
+/// The hinges, each particle's hinge refs, and the forces `hinge_forces` evaluated once per
+/// hinge (four per hinge, at the refs' indices) for `integrate` to gather.
+struct Hinges {
+    hinges: Vec<Hinge>,
+    csr: Csr<u32>,
+    forces: Vec<Vec4>,
 }
 
 /// Vertex Block Descent: the elements, the colour order and sweeps, and the solve's arrays.
@@ -115,8 +127,14 @@ pub struct SpatialHash {
 }
 
 impl CpuSolver {
-    /// A CPU solver for `model` running `plan`.
+    /// How the CPU evaluates hinges unless the plan says otherwise: once per hinge, measured
+    /// faster here than once per vertex (README, "Benchmarks").
+    pub const HINGES: HingeEvaluation = HingeEvaluation::Once;
+
+    /// A CPU solver for `model` running `plan` (with hinges as `HINGES` if the plan leaves it
+    /// open).
     pub fn new(model: &ClothModel, params: SimParams, plan: &PassPlan) -> Self {
+        let plan = &plan.for_backend(Self::HINGES);
         let n = model.len();
         CpuSolver {
             params,
@@ -127,7 +145,12 @@ impl CpuSolver {
             springs: plan
                 .contains(Pass::SpringForces)
                 .then(|| model.spring_csr()),
-            hinges: plan
+            hinges: plan.contains(Pass::HingeForces).then(|| Hinges {
+                hinges: model.hinges.clone(),
+                csr: model.hinge_csr(),
+                forces: vec![Vec4::ZERO; 4 * model.hinges.len()],
+            }),
+            vertex_hinges: plan
                 .contains(Pass::BendingForces)
                 .then(|| (model.hinges.clone(), model.hinge_csr())),
             triangles: plan
@@ -191,6 +214,11 @@ impl CpuSolver {
         &self.plan
     }
 
+    /// The forces `hinge_forces` wrote, four per hinge (for per-stage parity tests).
+    pub fn hinge_forces(&self) -> Option<&[Vec4]> {
+        self.hinges.as_ref().map(|h| &h.forces[..])
+    }
+
     /// The `monitor` stage's per-block partials of the current state.
     pub fn health_partials(&self) -> Vec<crate::solver::HealthPartial> {
         let csr = &self.monitor_springs;
@@ -215,9 +243,16 @@ impl CpuSolver {
                     &csr.items,
                 );
             }
+            Pass::HingeForces => {
+                let h = self
+                    .hinges
+                    .as_mut()
+                    .expect("hinge_forces is not in the plan");
+                hinge_forces(&self.pos, &h.hinges, &mut h.forces);
+            }
             Pass::BendingForces => {
                 let (hinges, csr) = self
-                    .hinges
+                    .vertex_hinges
                     .as_ref()
                     .expect("bending_forces is not in the plan");
                 bending_forces(
@@ -342,7 +377,14 @@ impl CpuSolver {
                 let v = self.vbd.as_ref().expect("vbd_finish is not in the plan");
                 vbd_finish(p, &v.x, &mut self.pos, &mut self.vel);
             }
-            Pass::Integrate => integrate(p, &mut self.pos, &mut self.vel, &mut self.force),
+            Pass::Integrate => {
+                let hinges = self.hinges.as_ref().map(|h| HingeGather {
+                    offsets: &h.csr.offsets,
+                    refs: &h.csr.items,
+                    forces: &h.forces,
+                });
+                integrate(p, &mut self.pos, &mut self.vel, &mut self.force, hinges);
+            }
             Pass::Monitor => {
                 panic!("monitor runs per frame through health(), not as a substep stage")
             }

@@ -6,8 +6,8 @@
 //! vertex's force (−gradient) and H its 3×3 Hessian block, x += H⁻¹f. Vertices of one colour
 //! share no element, so they update at once (one dispatch) without reading each other.
 
-use super::bending_forces::hinge_geometry;
 use super::collide_body::{body_velocity_at, sample_body_sdf, to_body_frame, to_world};
+use super::hinge_forces::hinge_geometry;
 use super::seam_forces::rest_gap;
 use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep};
 use crate::solver::converged_before;

@@ -32,8 +32,9 @@ impl ForceInput {
     }
 }
 
-/// The optional energies of `vbd_solve`: its `// section NAME` … `// else NAME` … `// end NAME`
-/// blocks keep the section when the scene has the energy and the `else` part when not.
+/// The optional energies of `vbd_solve` (and `integrate`'s bending gather): their
+/// `// section NAME` … `// else NAME` … `// end NAME` blocks keep the section when the scene
+/// has the energy and the `else` part when not.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct VbdEnergies {
     /// Dihedral hinges.

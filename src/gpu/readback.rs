@@ -85,6 +85,32 @@ impl GpuSolver {
         Ok(self.read_back(&[&self.forces[self.last_forces]])?.remove(0))
     }
 
+    /// Reads back the forces `hinge_forces` wrote, four per hinge (for per-stage parity tests).
+    pub fn hinge_forces(&self) -> Result<Vec<Vec4>, Error> {
+        let h = self
+            .hinge_forces
+            .as_ref()
+            .ok_or_else(|| Error::Gpu("hinge_forces is not in the plan".into()))?;
+        let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hinge_forces staging"),
+            size: h.padded_bytes(),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        h.copy_to_buffer(&mut encoder, &staging, 0);
+        self.ctx.queue.submit([encoder.finish()]);
+        // Back from CSR order (texel k holds ref hinge_refs[k]) to ref order, 4·h + role.
+        self.map_read(staging.slice(..), |bytes| {
+            let texels: &[Vec4] = bytemuck::cast_slice(bytes);
+            let mut forces = vec![Vec4::ZERO; self.hinge_refs.len()];
+            for (k, &r) in self.hinge_refs.iter().enumerate() {
+                forces[r as usize] = texels[k];
+            }
+            forces
+        })
+    }
+
     pub(super) fn read_back(&self, arrays: &[&TexelArray]) -> Result<Vec<Vec<Vec4>>, Error> {
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         let mut at = 0;

@@ -13,7 +13,7 @@ use super::texels::TexelArray;
 use crate::error::Error;
 use crate::model::layout::{SimParams, SubstepParams, Sweep, WORKGROUP_SIZE};
 use crate::model::ClothModel;
-use crate::plan::{Pass, PassPlan};
+use crate::plan::{HingeEvaluation, Pass, PassPlan};
 use crate::solver::{AdapterReport, ParticleState, Solver};
 use glam::Vec4;
 use wgpu::util::DeviceExt;
@@ -58,11 +58,16 @@ pub struct GpuSolver {
     pub(super) pos: [TexelArray; 2],
     pub(super) vel: [TexelArray; 2],
     pub(super) forces: Vec<TexelArray>,
+    /// What `hinge_forces` writes and `integrate` gathers: four texels per hinge, in CSR order.
+    pub(super) hinge_forces: Option<TexelArray>,
     /// Which of `pos`/`vel` holds the current state.
     pub(super) current: usize,
     /// Which of `forces` the last force stage wrote.
     pub(super) last_forces: usize,
     pub(super) n: usize,
+    /// Each particle's hinge refs in CSR order (the order `hinge_forces` writes in), for
+    /// reading its forces back.
+    pub(super) hinge_refs: Vec<u32>,
     pub(super) staging: wgpu::Buffer,
     pub(super) substeps: Option<SubstepBuffer>,
     pub(super) stages: Vec<Stage>,
@@ -74,8 +79,13 @@ pub struct GpuSolver {
 }
 
 impl GpuSolver {
-    /// Uploads `model` and builds the pipelines of `plan`. `max_batch` is the most substeps one
-    /// `advance` call submits at once (longer calls are split into batches of that size).
+    /// How the GPU evaluates hinges unless the plan says otherwise: once per vertex, measured
+    /// faster on lavapipe than once per hinge (README, "Benchmarks"; unmeasured on real GPUs).
+    pub const HINGES: HingeEvaluation = HingeEvaluation::PerVertex;
+
+    /// Uploads `model` and builds the pipelines of `plan` (with hinges as `HINGES` if the plan
+    /// leaves it open). `max_batch` is the most substeps one `advance` call submits at once
+    /// (longer calls are split into batches of that size).
     pub fn new(
         ctx: &GpuContext,
         model: &ClothModel,
@@ -83,6 +93,7 @@ impl GpuSolver {
         plan: &PassPlan,
         max_batch: usize,
     ) -> Result<Self, Error> {
+        let plan = &plan.for_backend(Self::HINGES);
         let n = model.len();
         let state_usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC;
         let mut labels = vec!["params", "positions", "velocities", "forces", "staging"];
@@ -112,6 +123,20 @@ impl GpuSolver {
         let forces = (0..force_textures)
             .map(|_| TexelArray::new(ctx, "forces", Rgba32Float, n, state_usage))
             .collect::<Result<Vec<_>, _>>()?;
+        let hinge_forces = match plan.contains(Pass::HingeForces) {
+            true => {
+                labels.push("hinge_forces");
+                let len = 4 * model.hinges.len();
+                Some(TexelArray::new(
+                    ctx,
+                    "hinge_forces",
+                    Rgba32Float,
+                    len,
+                    state_usage,
+                )?)
+            }
+            false => None,
+        };
         let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("staging"),
             size: 2 * pos[0].padded_bytes(),
@@ -234,6 +259,15 @@ impl GpuSolver {
         let mut force_index = 0;
         // The substep plan, then the per-frame monitor.
         for &pass in plan.passes.iter().chain(&[Pass::Monitor]) {
+            // integrate's bending section gathers what hinge_forces wrote.
+            let energies = match pass {
+                Pass::Integrate => VbdEnergies {
+                    bending: hinge_forces.is_some(),
+                    seams: false,
+                    body: false,
+                },
+                _ => energies,
+            };
             // Stage-specific arrays live as long as the bind groups that hold them.
             let mut owned: Vec<TexelArray> = Vec::new();
             let mut add = |label: &'static str, format, bytes: &[u8]| -> Result<(), Error> {
@@ -269,7 +303,16 @@ impl GpuSolver {
             let bindings = |p: usize| -> Vec<Binding> {
                 let o = |k: usize| Binding::Read(&owned[k]);
                 let out = || Binding::Write(&forces[force_out.expect("force stage")]);
+                let per_hinge = || hinge_forces.as_ref().expect("hinge_forces is in the plan");
                 match pass {
+                    Pass::HingeForces => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Read(&pos[p]),
+                        o(0),
+                        o(1),
+                        o(2),
+                        Binding::Write(per_hinge()),
+                    ],
                     Pass::SpringForces => vec![
                         Binding::Uniform(&params_buf),
                         Binding::Read(&pos[p]),
@@ -408,14 +451,21 @@ impl GpuSolver {
                         o(1),
                         Binding::Storage(&health, false),
                     ],
-                    Pass::Integrate => vec![
-                        Binding::Uniform(&params_buf),
-                        Binding::Read(&pos[p]),
-                        Binding::Read(&vel[p]),
-                        Binding::Read(&forces[summed]),
-                        Binding::Write(&pos[1 - p]),
-                        Binding::Write(&vel[1 - p]),
-                    ],
+                    Pass::Integrate => {
+                        let mut list = vec![
+                            Binding::Uniform(&params_buf),
+                            Binding::Read(&pos[p]),
+                            Binding::Read(&vel[p]),
+                            Binding::Read(&forces[summed]),
+                            Binding::Write(&pos[1 - p]),
+                            Binding::Write(&vel[1 - p]),
+                        ];
+                        list.extend(match hinge_forces.is_some() {
+                            true => [o(0), Binding::Read(per_hinge())],
+                            false => [Binding::Gap; 2],
+                        });
+                        list
+                    }
                 }
             };
             let input = if force_in.is_some() {
@@ -427,6 +477,7 @@ impl GpuSolver {
             let dispatch = match pass {
                 Pass::HashClear => dispatch_for(params.hash_buckets),
                 Pass::HashScan => (1, 1),
+                Pass::HingeForces => dispatch_for(model.hinges.len() as u32),
                 _ => dispatch_for(n as u32),
             };
             let mut stage = build_stage(
@@ -457,9 +508,14 @@ impl GpuSolver {
             pos,
             vel,
             forces,
+            hinge_forces,
             current: 0,
             last_forces: 0,
             n,
+            hinge_refs: match plan.contains(Pass::HingeForces) {
+                true => model.hinge_csr().items,
+                false => Vec::new(),
+            },
             staging,
             substeps,
             stages,
@@ -572,6 +628,11 @@ impl Solver for GpuSolver {
 enum Elements {
     Springs,
     Hinges,
+    /// Hinge offsets (their total counts the hinges), the hinges and their slots (for
+    /// `hinge_forces`).
+    HingeSlots,
+    /// Hinge offsets (for `integrate`'s gather).
+    HingeOffsets,
     Seams,
     Triangles,
     SelfNeighbours,
@@ -581,6 +642,7 @@ enum Elements {
 fn stage_elements(pass: Pass, energies: VbdEnergies) -> Vec<Elements> {
     match pass {
         Pass::SpringForces | Pass::StrainLimit | Pass::Monitor => vec![Elements::Springs],
+        Pass::HingeForces => vec![Elements::HingeSlots],
         Pass::BendingForces => vec![Elements::Hinges],
         Pass::WindForces => vec![Elements::Triangles],
         Pass::SeamForces => vec![Elements::Seams],
@@ -599,6 +661,8 @@ fn stage_elements(pass: Pass, energies: VbdEnergies) -> Vec<Elements> {
             }
             kinds
         }
+        // `integrate` gathers the bending forces when the plan evaluates hinges.
+        Pass::Integrate if energies.bending => vec![Elements::HingeOffsets],
         Pass::HashClear
         | Pass::HashCount
         | Pass::HashScan
@@ -607,6 +671,18 @@ fn stage_elements(pass: Pass, energies: VbdEnergies) -> Vec<Elements> {
         | Pass::VbdFinish
         | Pass::Integrate => vec![],
     }
+}
+
+/// Where each hinge's four forces go on the GPU: the CSR slots of its refs, `[u32; 4]` per
+/// hinge. `hinge_forces` scatters to them and `integrate` then reads each particle's bending
+/// forces as one contiguous run of texels, in CSR order (the CPU twin keeps the forces in ref
+/// order, `4·h + role`, and gathers through the refs: the same numbers, the same sum order).
+pub(super) fn hinge_slots(refs: &[u32]) -> Vec<u32> {
+    let mut slots = vec![0u32; refs.len()];
+    for (k, &r) in refs.iter().enumerate() {
+        slots[r as usize] = k as u32;
+    }
+    slots
 }
 
 /// The texel arrays of one kind of element: (label, texel format, bytes).
@@ -626,6 +702,34 @@ fn element_arrays(
                 (offsets, R32Uint, bytes(bytemuck::cast_slice(&csr.offsets))),
                 (items, Rgba32Uint, bytes(bytemuck::cast_slice(&csr.items))),
             ]
+        }
+        Elements::HingeSlots => {
+            let csr = model.hinge_csr();
+            vec![
+                (
+                    "hinge_offsets",
+                    R32Uint,
+                    bytes(bytemuck::cast_slice(&csr.offsets)),
+                ),
+                (
+                    "hinges",
+                    Rgba32Uint,
+                    bytes(bytemuck::cast_slice(&model.hinges)),
+                ),
+                (
+                    "hinge_slots",
+                    Rgba32Uint,
+                    bytes(bytemuck::cast_slice(&hinge_slots(&csr.items))),
+                ),
+            ]
+        }
+        Elements::HingeOffsets => {
+            let csr = model.hinge_csr();
+            vec![(
+                "hinge_offsets",
+                R32Uint,
+                bytes(bytemuck::cast_slice(&csr.offsets)),
+            )]
         }
         Elements::Hinges => {
             let csr = model.hinge_csr();

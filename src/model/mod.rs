@@ -82,7 +82,7 @@ impl<T: Copy> Csr<T> {
     }
 }
 
-/// sin(θ/2) of the signed dihedral angle of a hinge, as in `bending_forces.wgsl`.
+/// sin(θ/2) of the signed dihedral angle of a hinge, as in `hinge_forces.wgsl`.
 pub fn hinge_sin_half(x3: Vec3, x4: Vec3, x1: Vec3, x2: Vec3) -> f32 {
     let e = x4 - x3;
     let n1 = (x1 - x3).cross(x1 - x4).normalize_or_zero();

@@ -452,8 +452,26 @@ fn measure(
     } else {
         // The own passes' batch carries the same fixed cost as any batch: the empty plan
         // measures that, to take it off.
-        let alone = build(ctx, with, &PassPlan { passes: own }, batch)?.0;
-        let empty = build(ctx, with, &PassPlan { passes: Vec::new() }, batch)?.0;
+        let alone = build(
+            ctx,
+            with,
+            &PassPlan {
+                passes: own,
+                hinges: None,
+            },
+            batch,
+        )?
+        .0;
+        let empty = build(
+            ctx,
+            with,
+            &PassPlan {
+                passes: Vec::new(),
+                hinges: None,
+            },
+            batch,
+        )?
+        .0;
         solvers.push((alone, &with_steps[..]));
         solvers.push((empty, &with_steps[..]));
     }
