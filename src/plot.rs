@@ -38,15 +38,22 @@ pub fn log_log_svg(
             .x_label_area_size(48)
             .y_label_area_size(80)
             .build_cartesian_2d(
-                (x_lo / 1.5..x_hi * 1.5).log_scale(),
-                (y_lo / 2.0..y_hi * 2.0).log_scale(),
+                (x_lo / 1.5..x_hi * 1.5)
+                    .log_scale()
+                    .with_key_points(ticks(x_lo / 1.5, x_hi * 1.5)),
+                (y_lo / 2.0..y_hi * 2.0)
+                    .log_scale()
+                    .with_key_points(ticks(y_lo / 2.0, y_hi * 2.0)),
             )
             .map_err(draw)?;
         chart
             .configure_mesh()
             .x_desc(x_desc)
             .y_desc(y_desc)
-            .y_label_formatter(&|y| format!("{y:.1e}"))
+            .x_label_formatter(&|x| format!("{x:.0e}"))
+            .y_label_formatter(&|y| format!("{y:.0e}"))
+            // Log axes over less than a decade crowd the minor lines into grey bands.
+            .light_line_style(TRANSPARENT)
             .draw()
             .map_err(draw)?;
         for (k, s) in series.iter().enumerate() {
