@@ -599,16 +599,30 @@ fn a_sewing_time_draws_every_seam_shut_over_that_time() {
         for (f, frame_gaps) in gaps.iter().enumerate() {
             let t = f as f32 / scene.solver.fps;
             if t < sewing_time {
-                // A pair follows its shrinking rest gap up to the cloth's pull over the seam
-                // stiffness: a vertex's ≤ 6 springs (300 N/m) stretched by ≤ 30% of 2 cm pull
-                // with ≤ 10.8 N, i.e. ≤ 1.8 cm at k = 600 N/m. Measured ≤ 1.7 cm.
-                let rest = 1.0 - t / sewing_time;
-                let worst = (0..open.len())
-                    .map(|j| (frame_gaps[j] - open[j] * rest).abs())
+                let rest: Vec<f32> = open.iter().map(|o| o * (1.0 - t / sewing_time)).collect();
+                // The seam pulls only, so a pair lags its shrinking rest gap by what the cloth
+                // holds back over the seam stiffness: a vertex's ≤ 6 springs (300 N/m) stretched
+                // by ≤ 30% of 2 cm (the strain limit keeps it to 10%) pull with ≤ 10.8 N, i.e.
+                // ≤ 1.8 cm at k = 600 N/m. Measured ≤ 0.1 mm.
+                let lag = (0..open.len())
+                    .map(|j| frame_gaps[j] - rest[j])
                     .fold(0.0, f32::max);
                 assert!(
-                    worst <= 10.8 / k,
-                    "{name} frame {f}: a pair is {worst} m off its rest gap"
+                    lag <= 10.8 / k,
+                    "{name} frame {f}: a pair lags {lag} m behind its rest gap"
+                );
+                // Ahead of its rest gap a pair feels no seam force and rides its panel, which
+                // the other pairs draw in at their own rates: it may lead, but it is drawn in
+                // over the sewing time, not snapped, so it keeps over half of its rest gap.
+                // Measured ≥ 65% (the lead moves by ±10% with float summation order).
+                let (j, ratio) = (0..open.len())
+                    .map(|j| (j, frame_gaps[j] / rest[j]))
+                    .fold((0, f32::MAX), |a, b| if b.1 < a.1 { b } else { a });
+                assert!(
+                    ratio >= 0.5,
+                    "{name} frame {f}: pair {j} is at {} m of its {} m rest gap",
+                    frame_gaps[j],
+                    rest[j]
                 );
             } else {
                 let widest_now = frame_gaps.iter().copied().fold(0.0, f32::max);
