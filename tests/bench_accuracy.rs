@@ -44,45 +44,6 @@ fn tiny_scene(dir: &Path) -> PathBuf {
     path
 }
 
-/// One CSV line's cells: commas inside double quotes belong to the cell (the commands write no
-/// quote inside a quoted cell).
-fn split_csv(line: &str) -> Vec<String> {
-    let (mut cells, mut cell, mut quoted) = (Vec::new(), String::new(), false);
-    for c in line.chars() {
-        match c {
-            '"' => quoted = !quoted,
-            ',' if !quoted => cells.push(std::mem::take(&mut cell)),
-            c => cell.push(c),
-        }
-    }
-    cells.push(cell);
-    cells
-}
-
-/// The CSV as a header and rows of named cells.
-fn read_csv(path: &Path, last: &str) -> (Vec<String>, Vec<HashMap<String, String>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header = split_csv(lines.next().unwrap());
-    assert_eq!(header.last().map(String::as_str), Some(last));
-    let rows = lines
-        .map(|line| {
-            let cells = split_csv(line);
-            assert_eq!(cells.len(), header.len(), "{line}");
-            header.iter().cloned().zip(cells).collect()
-        })
-        .collect();
-    (header, rows)
-}
-
-fn finite(row: &HashMap<String, String>, column: &str) -> f64 {
-    let v: f64 = row[column]
-        .parse()
-        .unwrap_or_else(|_| panic!("{column} = {:?} in {row:?}", row[column]));
-    assert!(v.is_finite(), "{column} = {v} in {row:?}");
-    v
-}
-
 #[test]
 fn accuracy_quick_writes_every_documented_column() {
     let dir = common::out_dir("bench_accuracy", "accuracy");
@@ -103,7 +64,7 @@ fn accuracy_quick_writes_every_documented_column() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    let (header, rows) = read_csv(&out.join("accuracy.csv"), "error");
+    let (header, rows) = common::read_csv(&out.join("accuracy.csv"), "error");
     assert_eq!(
         header[..header.len() - 1],
         ACCURACY_COLUMNS.map(String::from)
@@ -155,27 +116,29 @@ fn accuracy_quick_writes_every_documented_column() {
             "final_ke_per_particle_j",
             "energy_drift",
         ] {
-            finite(row, column);
+            common::finite(row, column);
         }
         assert_eq!(row["max_seam_gap_m"], "", "{row:?}");
-        assert_eq!(finite(row, "frames"), 6.0);
+        assert_eq!(common::finite(row, "frames"), 6.0);
     }
     let reference = rows.iter().find(|r| r["knob"] == "reference").unwrap();
-    assert_eq!(finite(reference, "rms_error_m"), 0.0);
-    assert_eq!(finite(reference, "energy_drift"), 0.0);
+    assert_eq!(common::finite(reference, "rms_error_m"), 0.0);
+    assert_eq!(common::finite(reference, "energy_drift"), 0.0);
     // A coarser cloth is compared through its grid coordinates: its error is real (non-zero)
     // but smaller than the cloth (0.4 m).
     let coarse = rows
         .iter()
         .find(|r| r["knob"] == "particle_distance")
         .unwrap();
-    let e = finite(coarse, "rms_error_m");
+    let e = common::finite(coarse, "rms_error_m");
     assert!(e > 0.0 && e < 0.4, "{e}");
     let simplified = rows
         .iter()
         .find(|r| r["knob"] == "body_simplification")
         .unwrap();
-    assert!(finite(simplified, "body_triangles") < finite(reference, "body_triangles"));
+    assert!(
+        common::finite(simplified, "body_triangles") < common::finite(reference, "body_triangles")
+    );
 }
 
 #[test]
@@ -199,7 +162,7 @@ fn effects_quick_writes_every_documented_column() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    let (header, rows) = read_csv(&out.join("effects.csv"), "note");
+    let (header, rows) = common::read_csv(&out.join("effects.csv"), "note");
     assert_eq!(header, EFFECTS_COLUMNS.map(String::from));
     assert!(out.join("effects.md").is_file());
     let backends = if gpu { 2 } else { 1 };
@@ -222,7 +185,7 @@ fn effects_quick_writes_every_documented_column() {
             "residue_percent",
             "spread_percent",
         ] {
-            assert!(finite(row, column) > -1e12);
+            assert!(common::finite(row, column) > -1e12);
         }
         // Every pass the effect adds is a stage (pipeline or CPU pass) that goes with it.
         let added = row["passes_added"]
@@ -231,10 +194,10 @@ fn effects_quick_writes_every_documented_column() {
             .count();
         assert!(added > 0, "{row:?}");
         assert_eq!(
-            finite(row, "stages_with") - finite(row, "stages_without"),
+            common::finite(row, "stages_with") - common::finite(row, "stages_without"),
             added as f64,
             "{row:?}"
         );
-        assert!(finite(row, "resources_with") >= finite(row, "resources_without"));
+        assert!(common::finite(row, "resources_with") >= common::finite(row, "resources_without"));
     }
 }

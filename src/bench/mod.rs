@@ -5,11 +5,14 @@
 //! - [`integrators`]: one scene under symplectic and implicit Euler, on both backends;
 //! - [`accuracy`]: what accuracy costs in time, knob by knob, against a fine reference;
 //! - [`effects`]: what each optional effect costs per substep, on both backends;
+//! - [`fabric`]: the fabric presets in the Cusick drape and cantilever bending tests, against
+//!   published values;
 //! - [`peer`]: drapekit beside NVIDIA Warp's cloth benchmark and Newton's cloth solvers, on
 //!   Warp's benchmark cloth ([`warp_cloth`]), through a Python driver ([`python_peer`]).
 
 pub mod accuracy;
 pub mod effects;
+pub mod fabric;
 pub mod grid;
 pub mod integrators;
 pub mod peer;

@@ -62,6 +62,41 @@ enum BenchCommand {
     /// limit) costs per substep, added and removed, on the CPU and GPU paths; writes effects.csv
     /// and effects.md.
     Effects(EffectsArgs),
+    /// Every fabric preset in the Cusick drape test and the cantilever bending test, against
+    /// published drape coefficients and the preset's bending rigidity; writes fabric.csv and
+    /// fabric.md (and each specimen's scene under specimens/).
+    Fabric(FabricArgs),
+}
+
+/// `drapekit bench fabric --out DIR`.
+#[derive(Args)]
+#[command(after_help = "Examples:\n  \
+    drapekit bench fabric --out out/fabric\n  \
+    drapekit bench fabric --quick --presets cotton,silk --out out/fabric-quick")]
+struct FabricArgs {
+    /// Output folder for fabric.csv, fabric.md and the specimens' scenes.
+    #[arg(long)]
+    out: PathBuf,
+    /// Coarser specimens (1.5 cm Cusick spacing, 12 particles along the overhang), two
+    /// cantilever runs and at most 96 frames each.
+    #[arg(long)]
+    quick: bool,
+    /// The presets to test (default: all).
+    #[arg(long, value_delimiter = ',')]
+    presets: Vec<String>,
+    /// The specimens' integrator: symplectic (converges to the resting shape) or implicit
+    /// (Vertex Block Descent: at a few sweeps per step it does not; see README).
+    #[arg(long, default_value = "symplectic", value_parser = ["symplectic", "implicit"])]
+    integrator: String,
+    /// Substeps per frame (default: the stability estimate for symplectic, 4 for implicit).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    substeps: Option<u32>,
+    /// Implicit sweeps per substep.
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..))]
+    iterations: u32,
+    /// The most frames a specimen may take to settle (default 480; 96 with --quick).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    max_frames: Option<u32>,
 }
 
 /// `drapekit bench accuracy SCENE --out DIR`.
@@ -177,6 +212,21 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
                 out: e.out,
                 quick: e.quick,
                 adapter: e.adapter,
+            })
+            .map(|_| ())
+        }
+        (Some(BenchCommand::Fabric(f)), _) => {
+            drapekit::bench::fabric::run_cli(&drapekit::bench::fabric::FabricOptions {
+                out: f.out,
+                quick: f.quick,
+                presets: f.presets,
+                stepping: drapekit::bench::fabric::Stepping {
+                    substeps: f.substeps.or((f.integrator == "implicit").then_some(4)),
+                    integrator: f.integrator,
+                    iterations: f.iterations,
+                    max_frames: f.max_frames.unwrap_or(if f.quick { 96 } else { 480 }),
+                },
+                command: std::env::args().collect::<Vec<_>>().join(" "),
             })
             .map(|_| ())
         }

@@ -144,3 +144,46 @@ pub fn out_dir(tag: &str, name: &str) -> std::path::PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     dir
 }
+
+/// One CSV line's cells: commas inside double quotes belong to the cell (the commands write no
+/// quote inside a quoted cell).
+pub fn split_csv(line: &str) -> Vec<String> {
+    let (mut cells, mut cell, mut quoted) = (Vec::new(), String::new(), false);
+    for c in line.chars() {
+        match c {
+            '"' => quoted = !quoted,
+            ',' if !quoted => cells.push(std::mem::take(&mut cell)),
+            c => cell.push(c),
+        }
+    }
+    cells.push(cell);
+    cells
+}
+
+/// The CSV as a header and rows of named cells.
+pub fn read_csv(
+    path: &std::path::Path,
+    last: &str,
+) -> (Vec<String>, Vec<std::collections::HashMap<String, String>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = split_csv(lines.next().unwrap());
+    assert_eq!(header.last().map(String::as_str), Some(last));
+    let rows = lines
+        .map(|line| {
+            let cells = split_csv(line);
+            assert_eq!(cells.len(), header.len(), "{line}");
+            header.iter().cloned().zip(cells).collect()
+        })
+        .collect();
+    (header, rows)
+}
+
+/// A cell that must hold a finite number.
+pub fn finite(row: &std::collections::HashMap<String, String>, column: &str) -> f64 {
+    let v: f64 = row[column]
+        .parse()
+        .unwrap_or_else(|_| panic!("{column} = {:?} in {row:?}", row[column]));
+    assert!(v.is_finite(), "{column} = {v} in {row:?}");
+    v
+}

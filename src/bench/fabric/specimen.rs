@@ -1,0 +1,215 @@
+//! A test specimen: one flat pattern panel of a fabric preset, held where a test rig holds it,
+//! settled under gravity. Each specimen is written out as a scene (`scene.toml` beside its
+//! `specimen.json`), so that `drapekit run` repeats it.
+
+use crate::atomic_file::write_atomic;
+use crate::error::Error;
+use crate::scene::Scene;
+use crate::sim::{prepare, simulate, RunStats};
+use glam::Vec3;
+use std::collections::VecDeque;
+use std::path::Path;
+use std::time::Instant;
+
+/// The panel's outline, flat in the horizontal plane y = [`HEIGHT_M`], in metres.
+#[derive(Clone, Copy, Debug)]
+pub enum Outline {
+    /// A disc about the origin.
+    Circle {
+        /// Radius, m.
+        radius: f64,
+    },
+    /// A strip along x, centred on z = 0.
+    Strip {
+        /// Where it starts, m.
+        x0: f64,
+        /// Where it ends, m.
+        x1: f64,
+        /// Its width in z, m.
+        width: f64,
+    },
+}
+
+/// Where the rig sits: the specimen starts flat at this height (m), high enough to hang freely.
+pub const HEIGHT_M: f64 = 0.5;
+
+/// How a specimen is stepped.
+#[derive(Clone, Debug)]
+pub struct Stepping {
+    /// `"implicit"` or `"symplectic"`.
+    pub integrator: String,
+    /// Substeps per frame (`None`: the scene's "auto").
+    pub substeps: Option<u32>,
+    /// Implicit sweeps per substep.
+    pub iterations: u32,
+    /// The most frames to wait for the settle rule.
+    pub max_frames: u32,
+}
+
+/// A settled specimen.
+#[derive(Clone, Debug)]
+pub struct Settled {
+    /// Rest positions (the flat panel), m.
+    pub rest: Vec<Vec3>,
+    /// Positions at the last frame, m.
+    pub positions: Vec<Vec3>,
+    /// The mesh's triangles.
+    pub triangles: Vec<[u32; 3]>,
+    /// The frame the settle rule fired at (`None`: it ran `max_frames` without settling).
+    pub settled_frame: Option<u32>,
+    /// Frames simulated.
+    pub frames: u32,
+    /// Substeps per frame.
+    pub substeps: u32,
+    /// Particles.
+    pub particles: usize,
+    /// Seconds spent simulating.
+    pub wall_seconds: f64,
+}
+
+/// The panel's GarmentCode JSON (centimetres; the panel is rotated flat onto the xz plane).
+fn pattern_json(outline: Outline) -> String {
+    let cm = |m: f64| m * 100.0;
+    let (vertices, edges) = match outline {
+        Outline::Circle { radius } => {
+            // Three arcs of 120°, counter-clockwise, each bulging outward (to its right).
+            let r = cm(radius);
+            let corner = |k: f64| {
+                let a = k * std::f64::consts::TAU / 3.0;
+                format!("[{}, {}]", r * a.cos(), r * a.sin())
+            };
+            let arc = |a: u32, b: u32| {
+                format!(
+                    r#"{{"endpoints": [{a}, {b}], "curvature": {{"type": "circle", "params": [{r}, 0, 1]}}}}"#
+                )
+            };
+            (
+                format!("[{}, {}, {}]", corner(0.0), corner(1.0), corner(2.0)),
+                format!("[{}, {}, {}]", arc(0, 1), arc(1, 2), arc(2, 0)),
+            )
+        }
+        Outline::Strip { x0, x1, width } => {
+            let (a, b, h) = (cm(x0), cm(x1), cm(width) / 2.0);
+            (
+                format!("[[{a}, {}], [{b}, {}], [{b}, {h}], [{a}, {h}]]", -h, -h),
+                r#"[{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]}, {"endpoints": [3, 0]}]"#
+                    .to_string(),
+            )
+        }
+    };
+    // Rotation −90° about x maps the panel's (x, y) to (x, 0, −y).
+    format!(
+        r#"{{"pattern": {{"panels": {{"specimen": {{"translation": [0, {}, 0], "rotation": [-90, 0, 0], "vertices": {vertices}, "edges": {edges}}}}}, "stitches": []}}, "properties": {{"curvature_coords": "relative", "units_in_meter": 100}}}}"#,
+        cm(HEIGHT_M)
+    )
+}
+
+fn scene_toml(preset: &str, stretch: Option<f64>, spacing: f64, step: &Stepping) -> String {
+    let substeps = match step.substeps {
+        Some(n) => n.to_string(),
+        None => "\"auto\"".to_string(),
+    };
+    let mut s = format!(
+        "# Written by `drapekit bench fabric`: rerun with `drapekit run` on this file.\n\
+         [cloth.pattern]\npath = \"specimen.json\"\nparticle_distance_m = {spacing}\n\n\
+         [fabric]\npreset = \"{preset}\"\n{}\n\
+         [world]\ngravity_m_s2 = [0.0, -9.81, 0.0]\n\
+         # Air damping (a = -10 v, about critical for the slowest sway of a hanging drape)\n\
+         # settles the specimen in a second or two; at rest it has no force, so it does not\n\
+         # move the resting shape.\n\
+         air_damping_per_s = 10.0\n\n\
+         [solver]\nfps = 24\nframes = {}\nsubsteps = {substeps}\nintegrator = \"{}\"\n",
+        stretch.map_or(String::new(), |k| format!(
+            "# Softer than the preset: see README, \"Fabric against the real world\".\n\
+             stretch_stiffness_n_m = {k}\n"
+        )),
+        step.max_frames,
+        step.integrator
+    );
+    if step.integrator == "implicit" {
+        s += &format!("iterations = {}\n", step.iterations);
+    }
+    s
+}
+
+/// Frames over which a specimen must have stopped moving: 0.25 s at 24 fps.
+pub const SETTLE_WINDOW: usize = 6;
+
+/// Settles `preset` (with its stretch stiffness replaced by `stretch`, N/m, where given) cut to
+/// `outline` at `spacing` (m), with every particle whose rest position `held` accepts pinned,
+/// in `dir` (created). The specimen has settled once no particle moved more than `tolerance`
+/// (m) over the last [`SETTLE_WINDOW`] frames. (A kinetic-energy rule does not serve here: the
+/// stiff wovens keep a jitter of about 1 mm/s in their in-plane springs long after their shape
+/// has stopped changing.)
+#[allow(clippy::too_many_arguments)] // one specimen's whole description
+pub fn settle(
+    dir: &Path,
+    preset: &str,
+    stretch: Option<f64>,
+    outline: Outline,
+    spacing: f64,
+    step: &Stepping,
+    tolerance: f32,
+    held: impl Fn(Vec3) -> bool,
+) -> Result<Settled, Error> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    write_atomic(&dir.join("specimen.json"), pattern_json(outline).as_bytes())?;
+    let path = dir.join("scene.toml");
+    let mut toml = scene_toml(preset, stretch, spacing, step);
+    // A first build finds the particles the rig holds.
+    let free = Scene::parse(&toml, &path)?;
+    let model = prepare(&free)?.model;
+    let pins: Vec<String> = (0..model.positions.len())
+        .filter(|&i| held(model.positions[i]))
+        .map(|i| i.to_string())
+        .collect();
+    toml += &format!(
+        "\n# The particles the rig holds.\n[[pins]]\nindices = [{}]\n",
+        pins.join(", ")
+    );
+    write_atomic(&path, toml.as_bytes())?;
+    let scene = Scene::parse(&toml, &path)?;
+    let prep = prepare(&scene)?;
+    let mut solver = crate::run::build_solver(&prep, None)?;
+    let mut stats = RunStats::default();
+    let mut recent: VecDeque<Vec<Vec3>> = VecDeque::new();
+    let mut settled_frame = None;
+    let start = Instant::now();
+    let run = simulate(&prep, solver.as_mut(), &mut stats, |frame, s| {
+        recent.push_back(s.positions.iter().map(|p| p.truncate()).collect());
+        if recent.len() > SETTLE_WINDOW + 1 {
+            recent.pop_front();
+        }
+        if recent.len() == SETTLE_WINDOW + 1 {
+            let (old, new) = (&recent[0], &recent[SETTLE_WINDOW]);
+            let moved = old
+                .iter()
+                .zip(new)
+                .map(|(a, b)| a.distance(*b))
+                .fold(0.0, f32::max);
+            if moved <= tolerance {
+                settled_frame = Some(frame);
+                // Stops the run here: the shape is what the test measures.
+                return Err(Error::Interrupted {
+                    frame,
+                    dir: dir.to_path_buf(),
+                });
+            }
+        }
+        Ok(())
+    });
+    match run {
+        Err(Error::Interrupted { .. }) if settled_frame.is_some() => {}
+        other => other?,
+    }
+    Ok(Settled {
+        rest: prep.model.positions.clone(),
+        positions: recent.pop_back().unwrap_or_default(),
+        triangles: prep.model.triangles.clone(),
+        settled_frame,
+        frames: settled_frame.unwrap_or(stats.frames_run),
+        substeps: prep.substeps,
+        particles: prep.model.positions.len(),
+        wall_seconds: start.elapsed().as_secs_f64(),
+    })
+}

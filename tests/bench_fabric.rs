@@ -1,0 +1,78 @@
+//! Smoke test of `drapekit bench fabric --quick` on one preset: the command finishes, its CSV
+//! has the documented columns with finite values, and the virtual tests measure what they
+//! claim (a DC between limp and flat; a cantilever that bends as the elastica says).
+
+mod common;
+
+use drapekit::bench::fabric::CSV_COLUMNS;
+
+#[test]
+fn bench_fabric_quick_writes_both_tests_for_silk() {
+    let out = common::out_dir("bench-fabric", "quick");
+    let r = common::drapekit(&[
+        "bench",
+        "fabric",
+        "--quick",
+        "--presets",
+        "silk",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let (header, rows) = common::read_csv(&out.join("fabric.csv"), "wall_seconds");
+    assert_eq!(header, CSV_COLUMNS);
+    assert_eq!(rows.len(), 2);
+    let (cusick, cantilever) = (&rows[0], &rows[1]);
+    assert_eq!(
+        (&*cusick["test"], &*cantilever["test"]),
+        ("cusick", "cantilever")
+    );
+    for row in &rows {
+        for c in ["simulated", "preset_b_n_m", "spacing_m", "wall_seconds"] {
+            assert!(common::finite(row, c) > 0.0, "{c}");
+        }
+        assert!(common::finite(row, "particles") > 0.0);
+    }
+    // A drape coefficient lies between hanging straight down (0) and staying flat (100).
+    let dc = common::finite(cusick, "simulated");
+    assert!((0.0..100.0).contains(&dc), "DC {dc}%");
+    assert_eq!(common::finite(cusick, "published_low"), 20.0);
+    assert!(["yes", "no"].contains(&cusick["within_published"].as_str()));
+    // The two runs at 0.9 and 1.1 of the elastica's overhang straddle the test line when the
+    // model bends as the elastica says. Their chord angles may differ from the elastica's by
+    // what the clamp line's raggedness does: the held boundary is uncertain by about a quarter
+    // spacing, 1/48 of the overhang, and the angle goes roughly as the overhang cubed, so
+    // 3/48 × 41.5° ≈ 2.6°; the mesh's bending error at 12 particles adds well under 1°.
+    // 4° bounds both.
+    assert_eq!(cantilever["bracketed"], "yes");
+    let err = common::finite(cantilever, "angle_error_deg");
+    assert!(err.abs() < 4.0, "angle error {err}°");
+    let (gb, ideal) = (
+        common::finite(cantilever, "g_over_b"),
+        common::finite(cantilever, "elastica_g_over_b"),
+    );
+    // 4° of chord angle moves the crossing by about 4/(3 × 41.5) = 3% of the overhang, 10% of G.
+    assert!((gb / ideal - 1.0).abs() < 0.1, "G/B {gb} against {ideal}");
+    let md = std::fs::read_to_string(out.join("fabric.md")).unwrap();
+    assert!(md.contains("| silk |"), "{md}");
+    // Each specimen is a scene drapekit can run again.
+    assert!(out.join("specimens/cusick-silk/scene.toml").is_file());
+}
+
+#[test]
+fn an_unknown_preset_is_bad_input_and_writes_nothing() {
+    let out = common::out_dir("bench-fabric", "linen");
+    let r = common::drapekit(
+        &["bench", "fabric", "--presets", "silk,linen", "--out"]
+            .into_iter()
+            .chain([out.to_str().unwrap()])
+            .collect::<Vec<_>>(),
+    );
+    assert_eq!(r.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        stderr.contains("\"linen\"") && stderr.contains("cotton, denim"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+}
