@@ -67,9 +67,10 @@ pub fn log_log_svg(
                 .draw_series(s.points.iter().map(|&p| Circle::new(p, 4, color.filled())))
                 .map_err(draw)?;
         }
+        let corner = emptiest_corner(series, (x_lo / 1.5, x_hi * 1.5), (y_lo / 2.0, y_hi * 2.0));
         chart
             .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
+            .position(corner)
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
             .draw()
@@ -77,6 +78,43 @@ pub fn log_log_svg(
         root.present().map_err(draw)?;
     }
     write_atomic(path, svg.as_bytes())
+}
+
+/// The corner of the log–log plot with the fewest points near it (within 40% of each axis,
+/// lines sampled between their points), for the legend; lower right on a tie.
+fn emptiest_corner(series: &[Series], x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+    let unit = |v: f64, (lo, hi): (f64, f64)| (v / lo).ln() / (hi / lo).ln();
+    let mut at = Vec::new();
+    for s in series {
+        for pair in s.points.windows(2) {
+            for k in 0..8 {
+                let f = k as f64 / 8.0;
+                let (a, b) = (pair[0], pair[1]);
+                at.push((
+                    a.0.powf(1.0 - f) * b.0.powf(f),
+                    a.1.powf(1.0 - f) * b.1.powf(f),
+                ));
+            }
+        }
+        at.extend(s.points.last().copied());
+    }
+    let corners = [
+        (SeriesLabelPosition::LowerRight, (true, false)),
+        (SeriesLabelPosition::UpperLeft, (false, true)),
+        (SeriesLabelPosition::UpperRight, (true, true)),
+        (SeriesLabelPosition::LowerLeft, (false, false)),
+    ];
+    let near = |(right, top): (bool, bool)| {
+        (at.iter())
+            .filter(|&&(px, py)| {
+                let (u, v) = (unit(px, x), unit(py, y));
+                (if right { u > 0.6 } else { u < 0.4 }) && (if top { v > 0.6 } else { v < 0.4 })
+            })
+            .count()
+    };
+    (corners.into_iter())
+        .min_by_key(|&(_, c)| near(c))
+        .map_or(SeriesLabelPosition::LowerRight, |(p, _)| p)
 }
 
 /// 1, 2 and 5 times the powers of ten between `lo` and `hi`: tick marks for log axes.

@@ -653,7 +653,7 @@ pub fn simulate_from(
 
 /// The run-constant parameters after frame `frame`: gravity once its start frame is done, and
 /// the body's static friction once every seam is closed.
-fn phase_params(prep: &Prepared, frame: u32, stats: &RunStats) -> SimParams {
+pub fn phase_params(prep: &Prepared, frame: u32, stats: &RunStats) -> SimParams {
     let mut params = prep.params;
     if prep.gravity.1 > 0 && frame >= prep.gravity.1 {
         params.gravity = prep.gravity.0.extend(0.0).to_array();

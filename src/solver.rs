@@ -28,6 +28,16 @@ pub struct AdapterReport {
     pub device_type: String,
 }
 
+impl AdapterReport {
+    /// One line for reports: name, driver, API backend and device type.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} (driver {}, {}, device type {})",
+            self.name, self.driver, self.backend, self.device_type
+        )
+    }
+}
+
 /// A simulation backend: the CPU reference path or the wgpu path.
 pub trait Solver {
     /// "cpu" or "gpu".

@@ -4,6 +4,7 @@
 //! - [`grid`]: whole substeps of the benchmark cloth at several sizes, on both backends;
 //! - [`integrators`]: one scene under symplectic and implicit Euler, on both backends;
 //! - [`accuracy`]: what accuracy costs in time, knob by knob, against a fine reference;
+//! - [`collision`]: every contact strategy on a skirt on a turning body, at three sizes;
 //! - [`effects`]: what each optional effect costs per substep, on both backends;
 //! - [`fabric`]: the fabric presets in the Cusick drape and cantilever bending tests, against
 //!   published values;
@@ -11,6 +12,7 @@
 //!   Warp's benchmark cloth ([`warp_cloth`]), through a Python driver ([`python_peer`]).
 
 pub mod accuracy;
+pub mod collision;
 pub mod effects;
 pub mod fabric;
 pub mod grid;

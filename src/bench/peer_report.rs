@@ -114,10 +114,7 @@ fn markdown(opts: &PeerOptions, report: &PeerReport) -> String {
         md,
         "- Adapter (drapekit's GPU path): {}",
         match &report.adapter {
-            Some(a) => format!(
-                "{} (driver {}, {}, device type {})",
-                a.name, a.driver, a.backend, a.device_type
-            ),
+            Some(a) => a.describe(),
             None => "none".into(),
         }
     );

@@ -69,6 +69,8 @@ pub struct BodyBvh {
     nodes: Vec<Node>,
     order: Vec<u32>,
     mesh: TriMesh,
+    /// Each triangle's axis-aligned box (lower and upper corner).
+    boxes: Vec<[Vec3; 2]>,
     face_normals: Vec<DVec3>,
     vertex_normals: Vec<DVec3>,
     edge_normals: std::collections::HashMap<[u32; 2], DVec3>,
@@ -81,9 +83,16 @@ impl BodyBvh {
         let mut nodes = Vec::new();
         build(mesh, kind, &mut order, 0, &mut nodes);
         let (face_normals, vertex_normals, edge_normals) = pseudo_normals(mesh);
+        let boxes = (mesh.triangles.iter())
+            .map(|t| {
+                let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+                [a.min(b).min(c), a.max(b).max(c)]
+            })
+            .collect();
         BodyBvh {
             nodes,
             order,
+            boxes,
             mesh: mesh.clone(),
             face_normals,
             vertex_normals,
@@ -91,31 +100,57 @@ impl BodyBvh {
         }
     }
 
+    /// Bytes the hierarchy holds on the heap: its nodes, triangle order, copy of the mesh and
+    /// pseudo-normals (hash map entries counted at their key and value size).
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.nodes.capacity() * size_of::<Node>()
+            + self.order.capacity() * size_of::<u32>()
+            + self.boxes.capacity() * size_of::<[Vec3; 2]>()
+            + self.mesh.positions.capacity() * size_of::<Vec3>()
+            + self.mesh.triangles.capacity() * size_of::<[u32; 3]>()
+            + (self.face_normals.capacity() + self.vertex_normals.capacity()) * size_of::<DVec3>()
+            + self.edge_normals.capacity() * size_of::<([u32; 2], DVec3)>()
+    }
+
     /// Signed distance (negative inside) and nearest surface point, by branch and bound.
     pub fn query(&self, p: Vec3) -> (f32, Vec3) {
         let pd = p.as_dvec3();
         let mut best = (f64::INFINITY, DVec3::ZERO, 0u32);
-        let mut stack = vec![0u32];
-        while let Some(n) = stack.pop() {
-            let node = &self.nodes[n as usize];
-            if node.volume.distance(p) as f64 > best.0 {
+        // Nodes to visit with the lower bound their parent computed, so that no volume is
+        // measured twice. A median split of ≥ 4 triangles per leaf stays under 64 levels.
+        let mut stack = [(0u32, 0.0f32); 64];
+        let mut len = 1;
+        while len > 0 {
+            len -= 1;
+            let (n, bound) = stack[len];
+            if bound as f64 > best.0 {
                 continue;
             }
+            let node = &self.nodes[n as usize];
             match node.children {
                 Some([a, b]) => {
+                    let da = self.nodes[a as usize].volume.distance(p);
+                    let db = self.nodes[b as usize].volume.distance(p);
                     // Visit the nearer child first (pushed last) so that pruning bites early.
-                    let (da, db) = (
-                        self.nodes[a as usize].volume.distance(p),
-                        self.nodes[b as usize].volume.distance(p),
-                    );
-                    if da < db {
-                        stack.extend([b, a]);
+                    let (near, far) = if da < db {
+                        ((a, da), (b, db))
                     } else {
-                        stack.extend([a, b]);
-                    }
+                        ((b, db), (a, da))
+                    };
+                    stack[len] = far;
+                    stack[len + 1] = near;
+                    len += 2;
                 }
                 None => {
                     for &t in &self.order[node.first as usize..(node.first + node.count) as usize] {
+                        // The triangle's box bounds its distance from below: skip the exact
+                        // closest point (in f64) when the box is already farther than the best.
+                        let [lo, hi] = self.boxes[t as usize];
+                        let gap = (lo - p).max(p - hi).max(Vec3::ZERO).length();
+                        if gap as f64 > best.0 {
+                            continue;
+                        }
                         let [a, b, c] = self.corners(t);
                         let q = closest_point_on_triangle(pd, a, b, c);
                         let d = pd.distance(q);

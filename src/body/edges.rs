@@ -60,6 +60,13 @@ impl BodyEdges {
         }
     }
 
+    /// Bytes the edges hold on the heap: their ends, normals and BVH.
+    pub fn heap_bytes(&self) -> usize {
+        self.ends.capacity() * std::mem::size_of::<[Vec3; 2]>()
+            + self.normals.capacity() * std::mem::size_of::<Vec3>()
+            + self.bvh.total_memory_size()
+    }
+
     /// Number of edges.
     pub fn len(&self) -> usize {
         self.ends.len()

@@ -25,6 +25,14 @@ impl ExactBody {
         Ok(ExactBody { shape })
     }
 
+    /// Bytes parry's mesh holds on the heap: vertices, indices, pseudo-normals (one per vertex
+    /// and three per triangle) and its BVH.
+    pub fn heap_bytes(&self) -> usize {
+        let (v, t) = (self.shape.vertices().len(), self.shape.indices().len());
+        let vector = std::mem::size_of::<Vec3>();
+        v * vector + t * 3 * 4 + (v + 3 * t) * vector + self.shape.bvh().total_memory_size()
+    }
+
     /// Signed distance to the surface (negative inside) and the nearest surface point.
     pub fn query(&self, p: Vec3) -> (f32, Vec3) {
         let proj = self.shape.project_local_point(p, false);

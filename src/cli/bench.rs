@@ -66,6 +66,49 @@ enum BenchCommand {
     /// published drape coefficients and the preset's bending rigidity; writes fabric.csv and
     /// fabric.md (and each specimen's scene under specimens/).
     Fabric(FabricArgs),
+    /// Every way drapekit finds contacts with a body (the GPU's SDF pass, the CPU's SDF, BVHs
+    /// with AABB, OBB and sphere volumes, exact point–triangle with and without edge–edge,
+    /// brute force) on a skirt on a turning body at three sizes; writes collision.csv,
+    /// collision.md and collision.svg.
+    Collision(CollisionArgs),
+}
+
+/// `drapekit bench collision --out DIR`.
+#[derive(Args)]
+#[command(after_help = "Examples:\n  \
+    drapekit bench collision --out out/collision\n  \
+    drapekit bench collision --quick --out out/collision-quick\n  \
+    drapekit bench collision --strategies sdf,bvh-aabb,exact --scales 1,4 --out out/collision-some")]
+struct CollisionArgs {
+    /// Output folder for collision.csv, collision.md and collision.svg.
+    #[arg(long)]
+    out: PathBuf,
+    /// The scene: a pattern or grid cloth and a moving body.
+    #[arg(long, default_value = "fixtures/scenes/skirt_collision.toml")]
+    scene: PathBuf,
+    /// Particle-count multiples of the scene's cloth (default 1,4,16; 1 with --quick).
+    #[arg(long, value_delimiter = ',')]
+    scales: Vec<u32>,
+    /// The strategies (default: all): gpu-sdf, sdf, bvh-aabb, bvh-obb, bvh-sphere, exact,
+    /// exact+edges, brute (brute runs at the first scale only).
+    #[arg(long, value_delimiter = ',')]
+    strategies: Vec<String>,
+    /// One sample, two timed stages and ten substeps per strategy, at the scene's size.
+    #[arg(long)]
+    quick: bool,
+    /// Frames sampled over the body's motion (default 4; 1 with --quick).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    samples: Option<u32>,
+    /// Whole substeps timed per sample and strategy (default 50; 10 with --quick).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    window: Option<u32>,
+    /// Timed collision stages per sample and strategy (default 5; 2 with --quick).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    repeats: Option<u32>,
+    /// The GPU strategy's adapter: auto (honours WGPU_ADAPTER_NAME), fallback (software), or
+    /// part of an adapter name.
+    #[arg(long, default_value = "auto")]
+    adapter: AdapterChoice,
 }
 
 /// `drapekit bench fabric --out DIR`.
@@ -226,6 +269,27 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
                     iterations: f.iterations,
                     max_frames: f.max_frames.unwrap_or(if f.quick { 96 } else { 480 }),
                 },
+                command: std::env::args().collect::<Vec<_>>().join(" "),
+            })
+            .map(|_| ())
+        }
+        (Some(BenchCommand::Collision(c)), _) => {
+            let pick = |v: Option<u32>, normal: u32, quick: u32| {
+                v.unwrap_or(if c.quick { quick } else { normal }) as usize
+            };
+            drapekit::bench::collision::run_cli(&drapekit::bench::collision::CollisionOptions {
+                scales: match (c.scales.is_empty(), c.quick) {
+                    (false, _) => c.scales.clone(),
+                    (true, true) => vec![1],
+                    (true, false) => vec![1, 4, 16],
+                },
+                samples: pick(c.samples, 4, 1),
+                repeats: pick(c.repeats, 5, 2),
+                window: pick(c.window, 50, 10),
+                scene: c.scene,
+                out: c.out,
+                contenders: c.strategies,
+                adapter: c.adapter,
                 command: std::env::args().collect::<Vec<_>>().join(" "),
             })
             .map(|_| ())

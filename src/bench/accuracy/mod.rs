@@ -167,11 +167,7 @@ fn choose_backend(
         )
     };
     let gpu = |ctx: GpuContext| {
-        let a = ctx.report();
-        let d = format!(
-            "{} (driver {}, {}, device type {})",
-            a.name, a.driver, a.backend, a.device_type
-        );
+        let d = ctx.report().describe();
         (Backend::Gpu(Box::new(ctx)), d)
     };
     Ok(match choice {

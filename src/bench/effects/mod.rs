@@ -326,13 +326,7 @@ pub fn run_cli(opts: &EffectsOptions) -> Result<Vec<EffectRow>, Error> {
         }
     };
     let cpu_device = format!("CPU twin ({})", cpu_threads_description());
-    let gpu_device = ctx.as_ref().map(|c| {
-        let a = c.report();
-        format!(
-            "{} (driver {}, {}, device type {})",
-            a.name, a.driver, a.backend, a.device_type
-        )
-    });
+    let gpu_device = ctx.as_ref().map(|c| c.report().describe());
     let (repeats, target_s) = if opts.quick { (3, 0.05) } else { (15, 0.1) };
     let mut rows = Vec::new();
     for effect in Effect::ALL {

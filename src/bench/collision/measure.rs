@@ -1,0 +1,407 @@
+//! The contenders' structures, the warm-up that records the states every contender sees, and
+//! the timing and contact comparison on those states.
+
+use super::{CollisionOptions, CollisionRow, Contender};
+use crate::body::bvh::BodyBvh;
+use crate::body::edges::BodyEdges;
+use crate::body::exact::ExactBody;
+use crate::body::sdf::Sdf;
+use crate::body::{Collider, Strategy};
+use crate::cpu::CpuSolver;
+use crate::error::Error;
+use crate::gpu::{GpuContext, GpuSolver};
+use crate::model::layout::{SimParams, SubstepParams};
+use crate::plan::{Pass, PassPlan};
+use crate::scene::BodySettings;
+use crate::sim::{phase_params, simulate_from, substep_params, Prepared, RunStats};
+use crate::solver::{ParticleState, Solver};
+use glam::{Vec3, Vec4};
+use rayon::prelude::*;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// A contender's collider, with what building it cost.
+pub struct Built {
+    /// The contender.
+    pub contender: Contender,
+    /// Its collider (the same body, SDF and motion as the scene's).
+    pub collider: Arc<Collider>,
+    /// Seconds to build its structure.
+    pub build_s: f64,
+    /// Bytes of its structure.
+    pub memory_bytes: usize,
+}
+
+/// Builds every contender's collider from the prepared scene's body, timing each structure.
+/// `exact` is always built: it is the reference for contacts.
+pub fn build_all(
+    prep: &Prepared,
+    settings: &BodySettings,
+    contenders: &[Contender],
+) -> Result<Vec<Built>, Error> {
+    let base = prep.model.collider.as_ref().expect("the scene has a body");
+    let failed = |e: String| Error::Unstable(format!("building a collision structure: {e}"));
+    // The scene's SDF may have come from the cache: bake it again to time the bake.
+    let start = Instant::now();
+    let sdf =
+        Sdf::bake(&base.body, settings.sdf_resolution, settings.sdf_margin).map_err(failed)?;
+    let bake_s = start.elapsed().as_secs_f64();
+    let mesh = &base.body.mesh;
+    let mut all: Vec<Contender> = contenders.to_vec();
+    if !all.contains(&Contender::Cpu(Strategy::Exact)) {
+        all.push(Contender::Cpu(Strategy::Exact));
+    }
+    let mut built = Vec::new();
+    for contender in all {
+        let exact_start = Instant::now();
+        let exact = ExactBody::new(mesh).map_err(failed)?;
+        let exact_s = exact_start.elapsed().as_secs_f64();
+        let (strategy, mut bvh, mut edges) = (Strategy::Exact, None, None);
+        let (strategy, build_s, memory_bytes) = match contender {
+            Contender::GpuSdf | Contender::Cpu(Strategy::Sdf) => {
+                (Strategy::Sdf, bake_s, 4 * sdf.values.len())
+            }
+            Contender::Cpu(Strategy::Exact) => (strategy, exact_s, exact.heap_bytes()),
+            Contender::ExactEdges => {
+                let start = Instant::now();
+                let e = BodyEdges::new(mesh);
+                let edge_s = start.elapsed().as_secs_f64();
+                let bytes = exact.heap_bytes() + e.heap_bytes();
+                edges = Some(e);
+                (strategy, exact_s + edge_s, bytes)
+            }
+            Contender::Cpu(Strategy::Brute) => {
+                let bytes = std::mem::size_of_val(&mesh.positions[..])
+                    + std::mem::size_of_val(&mesh.triangles[..]);
+                (Strategy::Brute, 0.0, bytes)
+            }
+            Contender::Cpu(s) => {
+                let kind = s.volume().expect("the remaining strategies are BVHs");
+                let start = Instant::now();
+                let b = BodyBvh::new(mesh, kind);
+                let seconds = start.elapsed().as_secs_f64();
+                let bytes = b.heap_bytes();
+                bvh = Some(b);
+                (s, seconds, bytes)
+            }
+        };
+        let collider = Collider {
+            body: base.body.clone(),
+            sdf: sdf.clone(),
+            exact,
+            motion: base.motion.clone(),
+            strategy,
+            bvh,
+            edges,
+            bake: base.bake.clone(),
+        };
+        built.push(Built {
+            contender,
+            collider: Arc::new(collider),
+            build_s,
+            memory_bytes,
+        });
+    }
+    Ok(built)
+}
+
+/// A state every contender starts from.
+pub struct Sample {
+    /// The output frame whose end it is.
+    pub frame: u32,
+    /// The state at the end of the frame.
+    pub state: ParticleState,
+    /// The run-constant parameters then (gravity on, friction as sewn).
+    pub params: SimParams,
+    /// The next frame's substeps.
+    pub steps: Vec<SubstepParams>,
+    /// The state the collision stage receives in the next frame's first substep.
+    pub pre: ParticleState,
+}
+
+/// `count` frames spread evenly over the body's motion (over the second half of the run if the
+/// body holds still).
+pub fn sample_frames(prep: &Prepared, count: usize) -> Vec<u32> {
+    let end = prep.frames as f32 * prep.frame_dt;
+    let motion = &prep.model.collider.as_ref().expect("a body").motion;
+    let (t0, t1) = match (motion.moves(), motion.keys.first(), motion.keys.last()) {
+        (true, Some(a), Some(b)) => (a.time.min(end), b.time.min(end)),
+        _ => (0.5 * end, end),
+    };
+    let mut frames: Vec<u32> = (0..count)
+        .map(|k| {
+            let t = t0 + (k as f32 + 0.5) * (t1 - t0) / count as f32;
+            ((t / prep.frame_dt).round() as u32).clamp(1, prep.frames.max(1))
+        })
+        .collect();
+    frames.dedup();
+    frames
+}
+
+/// Runs the scene on the CPU (SDF strategy) to the last sample frame and records each sample
+/// and the state its collision stage receives.
+pub fn warm_up(prep: &Prepared, count: usize) -> Result<Vec<Sample>, Error> {
+    let frames = sample_frames(prep, count);
+    let mut run = prep.clone();
+    run.frames = *frames.last().expect("at least one sample");
+    let mut solver = CpuSolver::new(&run.model, run.params, &run.plan);
+    let mut stats = RunStats::default();
+    let mut taken: Vec<(u32, ParticleState, SimParams)> = Vec::new();
+    simulate_from(
+        &run,
+        &mut solver,
+        &mut stats,
+        None,
+        |frame, state, stats| {
+            if frame > 0 && frame % 12 == 0 {
+                println!("  warm-up frame {frame} of {}", run.frames);
+            }
+            if frames.contains(&frame) {
+                taken.push((frame, state.clone(), phase_params(prep, frame, stats)));
+            }
+            Ok(())
+        },
+    )?;
+    let before = PassPlan {
+        passes: (prep.plan.passes.iter().copied())
+            .filter(|&p| p != Pass::CollideBody)
+            .collect(),
+        hinges: prep.plan.hinges,
+    };
+    let mut stage = CpuSolver::new(&prep.model, prep.params, &before);
+    taken
+        .into_iter()
+        .map(|(frame, state, params)| {
+            let steps = substep_params(prep, frame + 1);
+            stage.set_params(&params);
+            stage.set_state(&state);
+            stage.advance(&steps[..1])?;
+            let pre = stage.state()?;
+            Ok(Sample {
+                frame,
+                state,
+                params,
+                steps,
+                pre,
+            })
+        })
+        .collect()
+}
+
+/// The particles a collision stage moved (position or velocity changed; pinned ones never).
+fn moved(before: &ParticleState, after: &ParticleState) -> Vec<bool> {
+    (before.positions.iter().zip(&after.positions))
+        .zip(before.velocities.iter().zip(&after.velocities))
+        .map(|((p, q), (v, w))| {
+            p.w != 0.0 && (p.truncate() != q.truncate() || v.truncate() != w.truncate())
+        })
+        .collect()
+}
+
+/// The deepest any particle, and any cloth-edge midpoint, lies inside the exact body at the
+/// body's pose of `step`, in m (0 when nothing is inside).
+fn deepest(
+    exact: &ExactBody,
+    step: &SubstepParams,
+    pos: &[Vec4],
+    edges: &[[u32; 2]],
+) -> (f32, f32) {
+    let v3 = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
+    let (bx, by, bz) = (v3(step.body_x), v3(step.body_y), v3(step.body_z));
+    let t = v3(step.body_translation);
+    let depth = |x: Vec3| {
+        let d = x - t;
+        (-exact.query(Vec3::new(bx.dot(d), by.dot(d), bz.dot(d))).0).max(0.0)
+    };
+    let particles = pos
+        .par_iter()
+        .map(|p| depth(p.truncate()))
+        .reduce(|| 0.0, f32::max);
+    let midpoints = (edges.par_iter())
+        .map(|e| depth(0.5 * (pos[e[0] as usize] + pos[e[1] as usize]).truncate()))
+        .reduce(|| 0.0, f32::max);
+    (particles, midpoints)
+}
+
+/// One contender's solvers at one size: its collision stage alone, a whole substep, and (GPU)
+/// a plan with no pass, whose batch cost the stage's time excludes.
+struct Runner {
+    alone: Box<dyn Solver>,
+    whole: Box<dyn Solver>,
+    empty: Option<Box<dyn Solver>>,
+    repeats: usize,
+    window: usize,
+    row: CollisionRow,
+}
+
+fn solver(
+    ctx: Option<&GpuContext>,
+    prep: &Prepared,
+    collider: &Arc<Collider>,
+    passes: Vec<Pass>,
+    batch: usize,
+) -> Result<Box<dyn Solver>, Error> {
+    let mut model = prep.model.clone();
+    model.collider = Some(collider.clone());
+    let plan = PassPlan {
+        passes,
+        hinges: prep.plan.hinges,
+    };
+    Ok(match ctx {
+        None => Box::new(CpuSolver::new(&model, prep.params, &plan)),
+        Some(ctx) => Box::new(GpuSolver::new(ctx, &model, prep.params, &plan, batch)?),
+    })
+}
+
+/// Times every contender on every sample (in turns, so that a change in the machine's load
+/// falls on all alike) and compares its contacts with `exact`'s.
+pub fn measure(
+    prep: &Prepared,
+    samples: &[Sample],
+    built: &[&Built],
+    ctx: Option<&GpuContext>,
+    opts: &CollisionOptions,
+) -> Result<Vec<CollisionRow>, Error> {
+    let window = opts.window.clamp(1, prep.substeps as usize);
+    let reference = (built.iter())
+        .find(|b| b.contender == Contender::Cpu(Strategy::Exact))
+        .expect("exact is always built");
+    let mut exact_alone = solver(None, prep, &reference.collider, vec![Pass::CollideBody], 1)?;
+    let edges: Vec<[u32; 2]> = prep.model.springs.iter().map(|s| s.ends).collect();
+    let exact = &reference.collider.exact;
+    let mut runners = Vec::new();
+    for &b in built {
+        if !opts.contenders.is_empty() && !opts.contenders.iter().any(|n| n == b.contender.name()) {
+            continue;
+        }
+        let gpu = (b.contender == Contender::GpuSdf).then_some(ctx).flatten();
+        let brute = b.contender == Contender::Cpu(Strategy::Brute);
+        // Every particle against every triangle takes seconds a stage: one stage, two substeps.
+        let (repeats, window) = if brute {
+            (opts.repeats.clamp(1, 2), window.min(2))
+        } else {
+            (opts.repeats.max(1), window)
+        };
+        let collider = &b.collider;
+        runners.push(Runner {
+            alone: solver(gpu, prep, collider, vec![Pass::CollideBody], window)?,
+            whole: solver(gpu, prep, collider, prep.plan.passes.clone(), window)?,
+            empty: match gpu {
+                Some(_) => Some(solver(gpu, prep, collider, Vec::new(), window)?),
+                None => None,
+            },
+            repeats,
+            window,
+            row: CollisionRow {
+                scale: 1,
+                particles: prep.model.len(),
+                body_triangles: collider.body.mesh.triangles.len(),
+                contender: b.contender,
+                device: String::new(),
+                samples: samples.len(),
+                repeats,
+                window_substeps: window,
+                collision_us: 0.0,
+                substep_us: 0.0,
+                contacts: 0,
+                exact_contacts: 0,
+                missed: 0,
+                extra: 0,
+                max_penetration: 0.0,
+                max_edge_penetration: 0.0,
+                build_s: b.build_s,
+                memory_bytes: b.memory_bytes,
+                note: note(b.contender),
+            },
+        });
+    }
+    let most = runners.iter().map(|r| r.repeats).max().unwrap_or(0);
+    for s in samples {
+        println!("  sample at frame {}", s.frame);
+        let first = &s.steps[..1];
+        exact_alone.set_params(&s.params);
+        exact_alone.set_state(&s.pre);
+        exact_alone.advance(first)?;
+        let truth = moved(&s.pre, &exact_alone.state()?);
+        // The fastest stage and (GPU) the fastest empty batch, each the least disturbed.
+        let mut fastest = vec![(f64::INFINITY, f64::INFINITY); runners.len()];
+        for round in 0..most {
+            for (r, best) in runners.iter_mut().zip(&mut fastest) {
+                if round >= r.repeats {
+                    continue;
+                }
+                r.alone.set_params(&s.params);
+                let (stage, empty) = stage_seconds(r, s)?;
+                *best = (best.0.min(stage), best.1.min(empty));
+            }
+        }
+        for (r, best) in runners.iter_mut().zip(fastest) {
+            // The contacts, and what the stage leaves inside the body.
+            r.alone.set_state(&s.pre);
+            r.alone.advance(first)?;
+            let after = r.alone.state()?;
+            let found = moved(&s.pre, &after);
+            let (d, e) = deepest(exact, &first[0], &after.positions, &edges);
+            let row = &mut r.row;
+            row.collision_us += 1e6 * (best.0 - best.1) / samples.len() as f64;
+            row.contacts += found.iter().filter(|&&m| m).count();
+            row.exact_contacts += truth.iter().filter(|&&m| m).count();
+            row.missed += truth.iter().zip(&found).filter(|(&t, &f)| t && !f).count();
+            row.extra += truth.iter().zip(&found).filter(|(&t, &f)| f && !t).count();
+            row.max_penetration = row.max_penetration.max(d);
+            row.max_edge_penetration = row.max_edge_penetration.max(e);
+        }
+        for r in runners.iter_mut() {
+            let steps = &s.steps[..r.window];
+            r.whole.set_params(&s.params);
+            r.whole.set_state(&s.state);
+            let start = Instant::now();
+            r.whole.advance(steps)?;
+            r.whole.finish()?;
+            let seconds = start.elapsed().as_secs_f64() / steps.len() as f64;
+            let end = r.whole.state()?;
+            let last = &steps[steps.len() - 1];
+            let (d, e) = deepest(exact, last, &end.positions, &edges);
+            let row = &mut r.row;
+            row.substep_us += 1e6 * seconds / samples.len() as f64;
+            row.max_penetration = row.max_penetration.max(d);
+            row.max_edge_penetration = row.max_edge_penetration.max(e);
+        }
+    }
+    Ok(runners.into_iter().map(|r| r.row).collect())
+}
+
+/// One timed collision stage on the sample's state and the fixed cost to take off it, in s.
+/// The GPU runs a batch of the same substep, since one stage is too short to time alone, and
+/// an empty plan's batch measures the fixed cost of a submission.
+fn stage_seconds(r: &mut Runner, s: &Sample) -> Result<(f64, f64), Error> {
+    r.alone.set_state(&s.pre);
+    let Some(empty) = r.empty.as_mut() else {
+        let start = Instant::now();
+        r.alone.advance(&s.steps[..1])?;
+        return Ok((start.elapsed().as_secs_f64(), 0.0));
+    };
+    let batch = vec![s.steps[0]; r.window];
+    let time = |solver: &mut Box<dyn Solver>| -> Result<f64, Error> {
+        solver.set_params(&s.params);
+        let start = Instant::now();
+        solver.advance(&batch)?;
+        solver.finish()?;
+        Ok(start.elapsed().as_secs_f64() / batch.len() as f64)
+    };
+    let stage = time(&mut r.alone)?;
+    empty.set_state(&s.pre);
+    Ok((stage, time(empty)?))
+}
+
+/// What to know about a contender's figures.
+fn note(c: Contender) -> String {
+    match c {
+        Contender::GpuSdf => "stage time: a batch of the same substep less an empty batch".into(),
+        Contender::Cpu(Strategy::Brute) => {
+            "first size only; at most two timed stages and two substeps".into()
+        }
+        Contender::Cpu(Strategy::Exact) => "the reference for contacts".into(),
+        _ => String::new(),
+    }
+}
