@@ -80,8 +80,9 @@ pub fn log_log_svg(
     write_atomic(path, svg.as_bytes())
 }
 
-/// The corner of the log–log plot with the fewest points near it (within 40% of each axis,
-/// lines sampled between their points), for the legend; lower right on a tie.
+/// The corner of the log–log plot with the fewest points under where the legend would sit
+/// (about a quarter of the width and 30% of the height; lines sampled between their points);
+/// lower right on a tie.
 fn emptiest_corner(series: &[Series], x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
     let unit = |v: f64, (lo, hi): (f64, f64)| (v / lo).ln() / (hi / lo).ln();
     let mut at = Vec::new();
@@ -108,7 +109,7 @@ fn emptiest_corner(series: &[Series], x: (f64, f64), y: (f64, f64)) -> SeriesLab
         (at.iter())
             .filter(|&&(px, py)| {
                 let (u, v) = (unit(px, x), unit(py, y));
-                (if right { u > 0.6 } else { u < 0.4 }) && (if top { v > 0.6 } else { v < 0.4 })
+                (if right { u > 0.75 } else { u < 0.25 }) && (if top { v > 0.7 } else { v < 0.3 })
             })
             .count()
     };

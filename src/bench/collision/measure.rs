@@ -162,21 +162,20 @@ pub fn warm_up(prep: &Prepared, count: usize) -> Result<Vec<Sample>, Error> {
             Ok(())
         },
     )?;
-    let before = PassPlan {
-        passes: (prep.plan.passes.iter().copied())
-            .filter(|&p| p != Pass::CollideBody)
-            .collect(),
-        hinges: prep.plan.hinges,
-    };
-    let mut stage = CpuSolver::new(&prep.model, prep.params, &before);
+    // The whole plan, so that an implicit solve keeps its contact term, less the stage itself.
+    let mut stage = Backend::Cpu(Box::new(CpuSolver::new(
+        &prep.model,
+        prep.params,
+        &prep.plan,
+    )));
     taken
         .into_iter()
         .map(|(frame, state, params)| {
             let steps = substep_params(prep, frame + 1);
-            stage.set_params(&params);
-            stage.set_state(&state);
-            stage.advance(&steps[..1])?;
-            let pre = stage.state()?;
+            stage.solver().set_params(&params);
+            stage.solver().set_state(&state);
+            stage.advance_without_collision(&steps[..1])?;
+            let pre = stage.solver().state()?;
             Ok(Sample {
                 frame,
                 state,
@@ -187,6 +186,46 @@ pub fn warm_up(prep: &Prepared, count: usize) -> Result<Vec<Sample>, Error> {
         })
         .collect()
 }
+
+/// A solver of either backend that can also run its plan less the collision stage.
+enum Backend {
+    Cpu(Box<CpuSolver>),
+    Gpu(Box<GpuSolver>),
+}
+
+impl Backend {
+    fn solver(&mut self) -> &mut dyn Solver {
+        match self {
+            Backend::Cpu(s) => s.as_mut(),
+            Backend::Gpu(s) => s.as_mut(),
+        }
+    }
+
+    /// Every stage of the plan but `collide_body`, once per step.
+    fn advance_without_collision(&mut self, steps: &[SubstepParams]) -> Result<(), Error> {
+        let without = |passes: &[Pass]| -> Vec<Pass> {
+            (passes.iter().copied())
+                .filter(|&p| p != Pass::CollideBody)
+                .collect()
+        };
+        match self {
+            Backend::Cpu(s) => {
+                let passes = without(&s.plan().passes);
+                for step in steps {
+                    for &pass in &passes {
+                        s.run_pass(pass, step);
+                    }
+                }
+                Ok(())
+            }
+            Backend::Gpu(s) => s.run_passes(&without(&s.pipeline_passes()), steps),
+        }
+    }
+}
+
+/// Substeps per timed batch of the GPU's stage alone: one stage is too short to time, and a
+/// batch of 100 puts it well above the batch's fixed cost on lavapipe.
+pub(super) const GPU_STAGE_BATCH: usize = 100;
 
 /// The particles a collision stage moved (position or velocity changed; pinned ones never).
 fn moved(before: &ParticleState, after: &ParticleState) -> Vec<bool> {
@@ -226,9 +265,9 @@ fn deepest(
 /// One contender's solvers at one size: its collision stage alone, a whole substep, and (GPU)
 /// a plan with no pass, whose batch cost the stage's time excludes.
 struct Runner {
-    alone: Box<dyn Solver>,
-    whole: Box<dyn Solver>,
-    empty: Option<Box<dyn Solver>>,
+    alone: Backend,
+    whole: Backend,
+    empty: Option<Backend>,
     repeats: usize,
     window: usize,
     row: CollisionRow,
@@ -240,7 +279,7 @@ fn solver(
     collider: &Arc<Collider>,
     passes: Vec<Pass>,
     batch: usize,
-) -> Result<Box<dyn Solver>, Error> {
+) -> Result<Backend, Error> {
     let mut model = prep.model.clone();
     model.collider = Some(collider.clone());
     let plan = PassPlan {
@@ -248,9 +287,39 @@ fn solver(
         hinges: prep.plan.hinges,
     };
     Ok(match ctx {
-        None => Box::new(CpuSolver::new(&model, prep.params, &plan)),
-        Some(ctx) => Box::new(GpuSolver::new(ctx, &model, prep.params, &plan, batch)?),
+        None => Backend::Cpu(Box::new(CpuSolver::new(&model, prep.params, &plan))),
+        Some(ctx) => Backend::Gpu(Box::new(GpuSolver::new(
+            ctx,
+            &model,
+            prep.params,
+            &plan,
+            batch,
+        )?)),
     })
+}
+
+/// Seconds per substep of `steps` from the sample's state, with the collision stage or
+/// without it: the faster of two runs, since a window's first run on a fresh solver also pays
+/// for first use (on the GPU, the first dispatch of each pipeline).
+fn window_seconds(
+    b: &mut Backend,
+    s: &Sample,
+    steps: &[SubstepParams],
+    collide: bool,
+) -> Result<f64, Error> {
+    let mut fastest = f64::INFINITY;
+    for _ in 0..2 {
+        b.solver().set_params(&s.params);
+        b.solver().set_state(&s.state);
+        let start = Instant::now();
+        match collide {
+            true => b.solver().advance(steps)?,
+            false => b.advance_without_collision(steps)?,
+        }
+        b.solver().finish()?;
+        fastest = fastest.min(start.elapsed().as_secs_f64() / steps.len() as f64);
+    }
+    Ok(fastest)
 }
 
 /// Times every contender on every sample (in turns, so that a change in the machine's load
@@ -266,9 +335,27 @@ pub fn measure(
     let reference = (built.iter())
         .find(|b| b.contender == Contender::Cpu(Strategy::Exact))
         .expect("exact is always built");
-    let mut exact_alone = solver(None, prep, &reference.collider, vec![Pass::CollideBody], 1)?;
+    let alone_plan = || vec![Pass::CollideBody];
+    let mut exact_alone = solver(None, prep, &reference.collider, alone_plan(), 1)?;
     let edges: Vec<[u32; 2]> = prep.model.springs.iter().map(|s| s.ends).collect();
     let exact = &reference.collider.exact;
+    // The plan less the collision stage, per backend: what a substep costs without it.
+    let sdf = (built.iter())
+        .find(|b| {
+            matches!(
+                b.contender,
+                Contender::GpuSdf | Contender::Cpu(Strategy::Sdf)
+            )
+        })
+        .map_or(&reference.collider, |b| &b.collider);
+    let full = || prep.plan.passes.clone();
+    let mut without_cpu = solver(None, prep, sdf, full(), window)?;
+    let mut without_gpu = match ctx {
+        Some(_) if built.iter().any(|b| b.contender == Contender::GpuSdf) => {
+            Some(solver(ctx, prep, sdf, full(), window)?)
+        }
+        _ => None,
+    };
     let mut runners = Vec::new();
     for &b in built {
         if !opts.contenders.is_empty() && !opts.contenders.iter().any(|n| n == b.contender.name()) {
@@ -276,7 +363,8 @@ pub fn measure(
         }
         let gpu = (b.contender == Contender::GpuSdf).then_some(ctx).flatten();
         let brute = b.contender == Contender::Cpu(Strategy::Brute);
-        // Every particle against every triangle takes seconds a stage: one stage, two substeps.
+        // Every particle against every triangle takes about a second a stage: at most two
+        // stages and two substeps.
         let (repeats, window) = if brute {
             (opts.repeats.clamp(1, 2), window.min(2))
         } else {
@@ -284,10 +372,10 @@ pub fn measure(
         };
         let collider = &b.collider;
         runners.push(Runner {
-            alone: solver(gpu, prep, collider, vec![Pass::CollideBody], window)?,
-            whole: solver(gpu, prep, collider, prep.plan.passes.clone(), window)?,
+            alone: solver(gpu, prep, collider, alone_plan(), GPU_STAGE_BATCH)?,
+            whole: solver(gpu, prep, collider, full(), window)?,
             empty: match gpu {
-                Some(_) => Some(solver(gpu, prep, collider, Vec::new(), window)?),
+                Some(_) => Some(solver(gpu, prep, collider, Vec::new(), GPU_STAGE_BATCH)?),
                 None => None,
             },
             repeats,
@@ -302,6 +390,7 @@ pub fn measure(
                 repeats,
                 window_substeps: window,
                 collision_us: 0.0,
+                in_run_us: 0.0,
                 substep_us: 0.0,
                 contacts: 0,
                 exact_contacts: 0,
@@ -319,10 +408,11 @@ pub fn measure(
     for s in samples {
         println!("  sample at frame {}", s.frame);
         let first = &s.steps[..1];
-        exact_alone.set_params(&s.params);
-        exact_alone.set_state(&s.pre);
-        exact_alone.advance(first)?;
-        let truth = moved(&s.pre, &exact_alone.state()?);
+        let x = exact_alone.solver();
+        x.set_params(&s.params);
+        x.set_state(&s.pre);
+        x.advance(first)?;
+        let truth = moved(&s.pre, &x.state()?);
         // The fastest stage and (GPU) the fastest empty batch, each the least disturbed.
         let mut fastest = vec![(f64::INFINITY, f64::INFINITY); runners.len()];
         for round in 0..most {
@@ -330,16 +420,16 @@ pub fn measure(
                 if round >= r.repeats {
                     continue;
                 }
-                r.alone.set_params(&s.params);
                 let (stage, empty) = stage_seconds(r, s)?;
                 *best = (best.0.min(stage), best.1.min(empty));
             }
         }
         for (r, best) in runners.iter_mut().zip(fastest) {
             // The contacts, and what the stage leaves inside the body.
-            r.alone.set_state(&s.pre);
-            r.alone.advance(first)?;
-            let after = r.alone.state()?;
+            let alone = r.alone.solver();
+            alone.set_state(&s.pre);
+            alone.advance(first)?;
+            let after = alone.state()?;
             let found = moved(&s.pre, &after);
             let (d, e) = deepest(exact, &first[0], &after.positions, &edges);
             let row = &mut r.row;
@@ -351,53 +441,75 @@ pub fn measure(
             row.max_penetration = row.max_penetration.max(d);
             row.max_edge_penetration = row.max_edge_penetration.max(e);
         }
+        // The plan without the stage is timed before each contender's window, in turns with
+        // them, and its fastest run counts: the least disturbed figure, as for everything else.
+        let steps = &s.steps[..window];
+        let (mut bare_cpu, mut bare_gpu) = (f64::INFINITY, f64::INFINITY);
+        let mut with = Vec::new();
         for r in runners.iter_mut() {
+            match (r.row.contender, without_gpu.as_mut()) {
+                (Contender::GpuSdf, Some(g)) => {
+                    bare_gpu = bare_gpu.min(window_seconds(g, s, steps, false)?)
+                }
+                _ => bare_cpu = bare_cpu.min(window_seconds(&mut without_cpu, s, steps, false)?),
+            }
             let steps = &s.steps[..r.window];
-            r.whole.set_params(&s.params);
-            r.whole.set_state(&s.state);
-            let start = Instant::now();
-            r.whole.advance(steps)?;
-            r.whole.finish()?;
-            let seconds = start.elapsed().as_secs_f64() / steps.len() as f64;
-            let end = r.whole.state()?;
+            with.push(window_seconds(&mut r.whole, s, steps, true)?);
+            let end = r.whole.solver().state()?;
             let last = &steps[steps.len() - 1];
             let (d, e) = deepest(exact, last, &end.positions, &edges);
             let row = &mut r.row;
-            row.substep_us += 1e6 * seconds / samples.len() as f64;
             row.max_penetration = row.max_penetration.max(d);
             row.max_edge_penetration = row.max_edge_penetration.max(e);
+        }
+        for (r, seconds) in runners.iter_mut().zip(with) {
+            let bare = match r.row.contender {
+                Contender::GpuSdf => bare_gpu,
+                _ => bare_cpu,
+            };
+            let row = &mut r.row;
+            row.substep_us += 1e6 * seconds / samples.len() as f64;
+            row.in_run_us += 1e6 * (seconds - bare) / samples.len() as f64;
         }
     }
     Ok(runners.into_iter().map(|r| r.row).collect())
 }
 
 /// One timed collision stage on the sample's state and the fixed cost to take off it, in s.
-/// The GPU runs a batch of the same substep, since one stage is too short to time alone, and
-/// an empty plan's batch measures the fixed cost of a submission.
+/// On the CPU an untimed stage on the same state runs first, so that the structures the other
+/// contenders pushed out of the caches are back; the GPU runs a batch of the same substep,
+/// and an empty plan's batch measures the fixed cost of a submission.
 fn stage_seconds(r: &mut Runner, s: &Sample) -> Result<(f64, f64), Error> {
-    r.alone.set_state(&s.pre);
+    let first = &s.steps[..1];
     let Some(empty) = r.empty.as_mut() else {
+        let alone = r.alone.solver();
+        alone.set_params(&s.params);
+        // Brute force takes a second a stage: its caches are not what limits it.
+        if r.row.contender != Contender::Cpu(Strategy::Brute) {
+            alone.set_state(&s.pre);
+            alone.advance(first)?;
+        }
+        alone.set_state(&s.pre);
         let start = Instant::now();
-        r.alone.advance(&s.steps[..1])?;
+        alone.advance(first)?;
         return Ok((start.elapsed().as_secs_f64(), 0.0));
     };
-    let batch = vec![s.steps[0]; r.window];
-    let time = |solver: &mut Box<dyn Solver>| -> Result<f64, Error> {
+    let batch = vec![s.steps[0]; GPU_STAGE_BATCH];
+    let time = |solver: &mut dyn Solver| -> Result<f64, Error> {
         solver.set_params(&s.params);
+        solver.set_state(&s.pre);
         let start = Instant::now();
         solver.advance(&batch)?;
         solver.finish()?;
         Ok(start.elapsed().as_secs_f64() / batch.len() as f64)
     };
-    let stage = time(&mut r.alone)?;
-    empty.set_state(&s.pre);
-    Ok((stage, time(empty)?))
+    Ok((time(r.alone.solver())?, time(empty.solver())?))
 }
 
 /// What to know about a contender's figures.
 fn note(c: Contender) -> String {
     match c {
-        Contender::GpuSdf => "stage time: a batch of the same substep less an empty batch".into(),
+        Contender::GpuSdf => "alone: a batch of the same substep less an empty batch".into(),
         Contender::Cpu(Strategy::Brute) => {
             "first size only; at most two timed stages and two substeps".into()
         }

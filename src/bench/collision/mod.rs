@@ -92,7 +92,7 @@ impl Contender {
 }
 
 /// The CSV's columns, in order (documented in README.md, "Collision strategies").
-pub const CSV_COLUMNS: [&str; 23] = [
+pub const CSV_COLUMNS: [&str; 24] = [
     "scale",
     "particles",
     "body_triangles",
@@ -103,6 +103,7 @@ pub const CSV_COLUMNS: [&str; 23] = [
     "repeats",
     "window_substeps",
     "collision_us_per_substep",
+    "collision_in_run_us",
     "substep_us",
     "collision_share_percent",
     "contacts",
@@ -138,8 +139,11 @@ pub struct CollisionRow {
     pub repeats: usize,
     /// Whole substeps timed per sample.
     pub window_substeps: usize,
-    /// The collision stage alone.
+    /// The collision stage alone, on the state every contender receives.
     pub collision_us: f64,
+    /// The collision stage in the contender's own run: a whole substep less the plan without
+    /// the stage, over the same window.
+    pub in_run_us: f64,
     /// A whole substep with this contender.
     pub substep_us: f64,
     /// Particles the stage moved, summed over the samples.
@@ -163,9 +167,9 @@ pub struct CollisionRow {
 }
 
 impl CollisionRow {
-    /// The collision stage's share of a whole substep, in %.
+    /// The collision stage's share of a whole substep in the contender's own run, in %.
     pub fn share_percent(&self) -> f64 {
-        100.0 * self.collision_us / self.substep_us
+        100.0 * self.in_run_us / self.substep_us
     }
 }
 

@@ -28,7 +28,7 @@ pub(super) fn csv_text(rows: &[CollisionRow]) -> String {
     for r in rows {
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\"",
+            "{},{},{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\"",
             r.scale,
             r.particles,
             r.body_triangles,
@@ -39,6 +39,7 @@ pub(super) fn csv_text(rows: &[CollisionRow]) -> String {
             r.repeats,
             r.window_substeps,
             cell(r.collision_us, 3),
+            cell(r.in_run_us, 3),
             cell(r.substep_us, 3),
             cell(r.share_percent(), 2),
             r.contacts,
@@ -129,20 +130,23 @@ pub(super) fn md_text(
     let mut md = format!(
         "Collision strategies on `{}` (body: {} triangles). One warm-up run per size (CPU, SDF) \
          records the state at {} frame(s) spread over the body's motion; every strategy then \
-         starts from the same states. **Collision** is the collision stage alone on the state it \
-         receives in the next substep (per sample the fastest of {} runs; the GPU's a batch of \
-         the same substep less an empty batch), **substep** a whole substep with that strategy \
-         (the mean over {} substeps from the frame's state), both averaged over the samples. \
-         **Contacts** are the particles the stage moved, summed over the samples; **missed** and \
-         **extra** are against `exact`. **Deepest** is the largest depth inside the exact body \
-         of any particle (or cloth-edge midpoint) after the stage and after each window. The \
-         body is rigid: its structures are built once and never refitted.\n\n\
+         starts from the same states. **Alone** is the collision stage by itself on the state \
+         it receives in the next substep (per sample the fastest of the repeats, each after an \
+         untimed stage on the same state; the GPU's a batch of {} of the same substep less an \
+         empty batch). **Substep** is a whole substep with that strategy (the mean over the \
+         window of substeps from the frame's state), and **in its run** that less the same \
+         window without the collision stage: the stage's cost in the strategy's own run, whose \
+         share of the substep the table gives. All are averaged over the samples. **Contacts** \
+         are the particles the stage moved, summed over the samples; **missed** and **extra** \
+         are against `exact`. **Deepest** is the largest depth inside the exact body of any \
+         particle (or cloth-edge midpoint) after the stage and after each window. The body is \
+         rigid: its structures are built once and never refitted. Our three BVHs keep their \
+         volume in one enum, so their nodes take the same memory whatever the volume.\n\n\
          - command: `{}`\n- CPU: {cpu}\n- GPU: {}\n",
         opts.scene.display(),
         first.map_or(0, |r| r.body_triangles),
         first.map_or(0, |r| r.samples),
-        opts.repeats,
-        opts.window,
+        super::measure::GPU_STAGE_BATCH,
         opts.command,
         gpu.unwrap_or("none (no adapter)"),
     );
@@ -155,17 +159,19 @@ pub(super) fn md_text(
         let _ = write!(
             md,
             "\n### {} particles ({s}× the scene's)\n\n\
-             | strategy | backend | collision µs/substep | share of substep | contacts | missed | extra | deepest particle mm | deepest edge mm | build ms | memory MiB |\n\
-             |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+             | strategy | backend | alone µs | in its run µs | substep µs | share | contacts | missed | extra | deepest particle mm | deepest edge mm | build ms | memory MiB | repeats × window | note |\n\
+             |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n",
             first.particles
         );
         for r in rows.iter().filter(|r| r.scale == s) {
             let _ = writeln!(
                 md,
-                "| {} | {} | {:.0} | {:.1}% | {} | {} ({:.1}%) | {} ({:.1}%) | {:.3} | {:.3} | {:.1} | {:.2} |",
+                "| {} | {} | {:.0} | {:.0} | {:.0} | {:.1}% | {} | {} ({:.1}%) | {} ({:.1}%) | {:.3} | {:.3} | {:.1} | {:.2} | {} × {} | {} |",
                 r.contender.name(),
                 r.contender.backend(),
                 r.collision_us,
+                r.in_run_us,
+                r.substep_us,
                 r.share_percent(),
                 r.contacts,
                 r.missed,
@@ -175,7 +181,10 @@ pub(super) fn md_text(
                 1e3 * r.max_penetration,
                 1e3 * r.max_edge_penetration,
                 1e3 * r.build_s,
-                r.memory_bytes as f64 / 1048576.0
+                r.memory_bytes as f64 / 1048576.0,
+                r.repeats,
+                r.window_substeps,
+                r.note
             );
         }
     }
