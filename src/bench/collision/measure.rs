@@ -131,7 +131,13 @@ pub fn sample_frames(prep: &Prepared, count: usize) -> Vec<u32> {
     let mut frames: Vec<u32> = (0..count)
         .map(|k| {
             let t = t0 + (k as f32 + 0.5) * (t1 - t0) / count as f32;
-            ((t / prep.frame_dt).round() as u32).clamp(1, prep.frames.max(1))
+            let frame = ((t / prep.frame_dt).round() as u32).clamp(1, prep.frames.max(1));
+            // Attached particles are released after their last frame: a sample there would
+            // still hold them, which no substep of the next frame does.
+            match !prep.attached.is_empty() && frame == prep.attach_frames {
+                true => frame + 1,
+                false => frame,
+            }
         })
         .collect();
     frames.dedup();
