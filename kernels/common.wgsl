@@ -24,23 +24,45 @@ struct SimParams {
     drag_coefficient: f32,       // 1, wind drag
     sewing_rate: f32,            // 1/s, fraction of each seam's open gap closed per second
     iterations: u32,             // Vertex Block Descent sweeps per substep (implicit Euler)
-    sdf_origin: vec4<f32>,       // xyz: body-frame position of SDF node (0,0,0) in m, w: node spacing in m
-    sdf_dims: vec4<u32>,         // xyz: SDF nodes along x, y, z; w: unused
-    thickness: f32,              // m, collision thickness around the body
-    friction: f32,               // 1, Coulomb coefficient against the body
-    normal_loss: f32,            // 1, fraction of outward normal relative speed lost in contact
-    tangential_loss: f32,        // 1, fraction of tangential relative speed lost in contact
     self_thickness: f32,         // m, particles of the cloth keep this far apart (self-collision)
     hash_cell: f32,              // m, spatial hash cell size (at least self_thickness)
     hash_buckets: u32,           // spatial hash table size
     strain_limit: f32,           // 1, largest edge stretch strain_limit lets through (0.1 = 10%)
     strain_iterations: u32,      // Jacobi iterations of strain_limit per substep
-    friction_slip_speed: f32,    // m/s, implicit Euler's friction is static (smoothed) below this slip speed
     tolerance: f32,              // 1, implicit Euler stops sweeping once the largest step falls below tolerance × the first (0: never)
-    _pad5: u32,
+    num_bodies: u32,             // collision bodies in `bodies`
+    _pad0: u32,
+    bodies: array<BodyParams, MAX_BODIES>,
 }
 
-// Values that change per substep. One entry per substep of a frame, at a 256-byte stride,
+// Most collision bodies a scene may have: every substep's uniform carries each one's pose.
+const MAX_BODIES: u32 = 4u;
+
+// One collision body's SDF and contact response.
+struct BodyParams {
+    sdf_origin: vec4<f32>,       // xyz: body-frame position of SDF node (0,0,0) in m, w: node spacing in m
+    sdf_dims: vec4<u32>,         // xyz: SDF nodes along x, y, z; w: the body's first node in the SDF texture
+    thickness: f32,              // m, collision thickness around the body
+    friction: f32,               // 1, Coulomb coefficient against the body
+    normal_loss: f32,            // 1, fraction of outward normal relative speed lost in contact
+    tangential_loss: f32,        // 1, fraction of tangential relative speed lost in contact
+    friction_slip_speed: f32,    // m/s, implicit Euler's friction is static (smoothed) below this slip speed
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// One collision body's pose and velocity at the end of a substep, where collision is resolved.
+struct BodyPose {
+    x: vec4<f32>,                // rotation, columns (body to world); w: unused
+    y: vec4<f32>,
+    z: vec4<f32>,
+    translation: vec4<f32>,      // m
+    velocity: vec4<f32>,         // m/s of the body frame's origin
+    angular_velocity: vec4<f32>, // rad/s, world frame
+}
+
+// Values that change per substep. One entry per substep of a frame, at a stride of the adapter's uniform offset alignment,
 // selected with a dynamic uniform offset so that a whole frame encodes in one submission.
 struct SubstepParams {
     wind: vec4<f32>,             // xyz: wind velocity in m/s at this substep, w: unused
@@ -48,12 +70,7 @@ struct SubstepParams {
     substep: u32,
     _pad0: u32,
     _pad1: u32,
-    body_x: vec4<f32>,           // body rotation, columns (body to world); w: unused
-    body_y: vec4<f32>,
-    body_z: vec4<f32>,
-    body_translation: vec4<f32>, // m
-    body_velocity: vec4<f32>,    // m/s of the body frame's origin
-    body_angular_velocity: vec4<f32>, // rad/s, world frame
+    bodies: array<BodyPose, MAX_BODIES>,
 }
 
 // One incident spring seen from a particle (CSR entry): the spring is stored once per end.
@@ -87,7 +104,7 @@ struct Seam {
     open_gap: f32,               // m, rest gap at time 0
 }
 
-// One Vertex Block Descent sweep of one colour (implicit Euler), at a 256-byte stride, selected
+// One Vertex Block Descent sweep of one colour (implicit Euler), at a stride of the adapter's uniform offset alignment, selected
 // with a dynamic uniform offset: the vertices order[first .. first + count].
 struct Sweep {
     first: u32,
@@ -213,12 +230,13 @@ fn hinge_terms(stiffness: f32, x3: vec3<f32>, x4: vec3<f32>, x1: vec3<f32>, x2: 
 const SDF_FAR: f32 = 1e30;
 
 fn sdf_node(sdf: texture_2d<f32>, d: vec4<u32>, i: u32, j: u32, k: u32) -> f32 {
-    return textureLoad(sdf, texel(i + d.x * (j + d.y * k)), 0).x;
+    return textureLoad(sdf, texel(d.w + i + d.x * (j + d.y * k)), 0).x;
 }
 
-// Trilinear φ (w) and its gradient (xyz) at body-frame point p of the body's SDF (r32float,
-// one node per texel, x fastest) with node (0,0,0) at origin.xyz, spacing origin.w and dims.xyz
-// nodes (SimParams.sdf_origin and sdf_dims). CPU twin: body::sdf::sdf_sample.
+// Trilinear φ (w) and its gradient (xyz) at body-frame point p of a body's SDF (r32float, one
+// node per texel, x fastest, every body's nodes one after another) with node (0,0,0) at
+// origin.xyz, spacing origin.w, dims.xyz nodes and its first node at dims.w (BodyParams.sdf_origin
+// and sdf_dims). CPU twin: body::sdf::sdf_sample on the body's own nodes.
 fn sdf_sample(sdf: texture_2d<f32>, origin: vec4<f32>, dims: vec4<u32>, p: vec3<f32>) -> vec4<f32> {
     let g = (p - origin.xyz) / origin.w;
     let last = vec3<f32>(dims.xyz) - vec3<f32>(1.0);

@@ -148,43 +148,52 @@ fn add_seams(i: u32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>
 fn add_seams(i: u32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {}
 // end seams
 
-// section body
-@group(0) @binding(16) var sdf: texture_2d<f32>;               // r32float, the body's SDF
+// The contact penalty's stiffness over the mean diagonal of the vertex's other terms.
+const CONTACT_RATIO: f32 = 100.0;
 
-// Body contact inside the solve, at the body's pose at the end of the step (CPU twin documents
+// section body
+@group(0) @binding(16) var sdf: texture_2d<f32>;               // r32float, every body's nodes in turn
+
+// Body contact inside the solve, at each body's pose at the end of the step (CPU twin documents
 // the choices): a penalty ½k_c(thickness − φ)² where φ < thickness with Hessian k_c·n̂n̂ᵀ, k_c
 // CONTACT_RATIO times the mean diagonal of everything else on the vertex; and Coulomb friction
 // lagged on the penalty's normal force λ, opposing the slip u over the step, smoothed below the
-// slip speed params.friction_slip_speed: f = −μλ·u / max(|u|, friction_slip_speed·h).
-const CONTACT_RATIO: f32 = 100.0;
+// body's slip speed: f = −μλ·u / max(|u|, friction_slip_speed·h).
 
-// Returns the body's outward normal (xyz) and signed distance φ (w) at the vertex.
-fn add_contact(i: u32, xi: vec3<f32>, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) -> vec4<f32> {
-    let d = xi - step.body_translation.xyz;
-    let xb = vec3<f32>(dot(step.body_x.xyz, d), dot(step.body_y.xyz, d), dot(step.body_z.xyz, d));
-    let s = sdf_sample(sdf, params.sdf_origin, params.sdf_dims, xb);
-    let n = safe_normalize(step.body_x.xyz * s.x + step.body_y.xyz * s.y + step.body_z.xyz * s.z);
-    if (s.w >= params.thickness) {
-        return vec4<f32>(n, s.w);
+// Body b's outward normal (xyz) and signed distance φ (w) at the vertex.
+fn body_surface(b: u32, xi: vec3<f32>) -> vec4<f32> {
+    let pose = step.bodies[b];
+    let d = xi - pose.translation.xyz;
+    let xb = vec3<f32>(dot(pose.x.xyz, d), dot(pose.y.xyz, d), dot(pose.z.xyz, d));
+    let s = sdf_sample(sdf, params.bodies[b].sdf_origin, params.bodies[b].sdf_dims, xb);
+    let n = safe_normalize(pose.x.xyz * s.x + pose.y.xyz * s.y + pose.z.xyz * s.z);
+    return vec4<f32>(n, s.w);
+}
+
+// Body b's contact terms for a vertex with surface s (from body_surface).
+fn add_contact(b: u32, i: u32, xi: vec3<f32>, s: vec4<f32>, k_c: f32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {
+    let body = params.bodies[b];
+    if (s.w >= body.thickness) {
+        return;
     }
-    let hm = *hs;
-    let k_c = CONTACT_RATIO * (hm[0].x + hm[1].y + hm[2].z) / 3.0;
-    let lambda = k_c * (params.thickness - s.w);
+    let n = s.xyz;
+    let lambda = k_c * (body.thickness - s.w);
     *f = *f + lambda * n;
     *hs = *hs + k_c * outer(n, n);
     let h = params.dt;
-    let v_body = step.body_velocity.xyz + cross(step.body_angular_velocity.xyz, d);
+    let pose = step.bodies[b];
+    let v_body = pose.velocity.xyz + cross(pose.angular_velocity.xyz, xi - pose.translation.xyz);
     let slip = moved(i) - h * v_body;
     let u = slip - dot(slip, n) * n;
-    let scale = params.friction * lambda / max(length(u), params.friction_slip_speed * h);
+    let scale = body.friction * lambda / max(length(u), body.friction_slip_speed * h);
     *f = *f - scale * u;
     *hs = *hs + scale * (diagonal(1.0) - outer(n, n));
-    return vec4<f32>(n, s.w);
 }
 // else body
-fn add_contact(i: u32, xi: vec3<f32>, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) -> vec4<f32> {
+fn body_surface(b: u32, xi: vec3<f32>) -> vec4<f32> {
     return vec4<f32>(0.0, 0.0, 0.0, 3.4e38);
 }
+fn add_contact(b: u32, i: u32, xi: vec3<f32>, s: vec4<f32>, k_c: f32, f: ptr<function, vec3<f32>>, hs: ptr<function, mat3x3<f32>>) {}
 // end body
 
 // How far inside the contact layer, as a fraction of the thickness, a vertex that reaches it
@@ -219,14 +228,22 @@ fn newton_step(i: u32) -> f32 {
     add_springs(i, xi, &f, &hs);
     add_bending(i, &f, &hs);
     add_seams(i, &f, &hs);
-    let surface = add_contact(i, xi, &f, &hs);
+    let k_c = CONTACT_RATIO * (hs[0].x + hs[1].y + hs[2].z) / 3.0;
+    var surfaces: array<vec4<f32>, MAX_BODIES>;
+    for (var b = 0u; b < params.num_bodies; b = b + 1u) {
+        surfaces[b] = body_surface(b, xi);
+        add_contact(b, i, xi, surfaces[b], k_c, &f, &hs);
+    }
     var delta = solve3(hs, f);
-    if (surface.w >= params.thickness) {
-        // A step that would enter the contact layer from outside stops just inside it.
-        let entry = params.thickness * (1.0 - CONTACT_ENTRY);
-        let landing = surface.w + dot(surface.xyz, delta);
-        if (landing < entry) {
-            delta = delta + (entry - landing) * surface.xyz;
+    for (var b = 0u; b < params.num_bodies; b = b + 1u) {
+        let thickness = params.bodies[b].thickness;
+        if (surfaces[b].w >= thickness) {
+            // A step that would enter the contact layer from outside stops just inside it.
+            let entry = thickness * (1.0 - CONTACT_ENTRY);
+            let landing = surfaces[b].w + dot(surfaces[b].xyz, delta);
+            if (landing < entry) {
+                delta = delta + (entry - landing) * surfaces[b].xyz;
+            }
         }
     }
     x[i] = vec4<f32>(xi + delta, prev.w);

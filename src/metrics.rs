@@ -65,12 +65,11 @@ pub fn max_penetration(distances: &[f32]) -> f32 {
     distances.iter().map(|d| -d).fold(0.0, f32::max)
 }
 
-/// Particles resting on the body: outside it and within `reach` (m) of its surface.
-pub fn body_contacts(distances: &[f32], reach: f32) -> usize {
-    distances
-        .iter()
-        .filter(|&&d| d >= 0.0 && d <= reach)
-        .count()
+/// Marks the particles resting on a body: outside it and within `reach` (m) of its surface.
+pub fn mark_contacts(distances: &[f32], reach: f32, touching: &mut [bool]) {
+    for (t, &d) in touching.iter_mut().zip(distances) {
+        *t |= (0.0..=reach).contains(&d);
+    }
 }
 
 /// What a user should know about a cloth mesh before trusting a run: triangles with no area

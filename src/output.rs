@@ -84,18 +84,23 @@ pub struct Summary {
     pub seam_gaps_m: Vec<f32>,
     /// The first output frame at which every seam was closed.
     pub seams_closed_frame: Option<u32>,
-    /// CPU contact strategy against the body (`null` without a body; the GPU uses the SDF).
+    /// Collision bodies in the scene.
+    pub bodies: usize,
+    /// CPU contact strategy against the (first) body (`null` without a body; the GPU uses the
+    /// SDF).
     pub collision_strategy: Option<&'static str>,
-    /// Whether cloth edges were also tested against the body's edges (CPU only).
+    /// Whether cloth edges were also tested against the (first) body's edges (CPU only).
     pub edge_contacts: Option<bool>,
-    /// Deepest particle inside the body at any output frame, measured against the exact mesh.
+    /// Deepest particle inside any body at any output frame, measured against the exact mesh.
     pub max_penetration_m: Option<f32>,
-    /// Particles resting on the body at the last frame: outside it and within the collision
+    /// Particles resting on a body at the last frame: outside it and within the collision
     /// thickness plus 1 mm of its exact surface.
     pub body_contacts: Option<usize>,
-    /// The body's SDF: grid, bake time, memory, cache.
+    /// The (first) body's SDF: grid, bake time, memory, cache.
     pub sdf: Option<crate::body::sdf::BakeReport>,
-    /// Fastest body surface point in m/s, and how far it moves in one substep in m.
+    /// Every body's SDF, in scene order (empty without a body).
+    pub body_sdfs: Vec<crate::body::sdf::BakeReport>,
+    /// Fastest surface point of any body in m/s.
     pub body_surface_speed_m_s: Option<f32>,
     /// Body surface travel per substep in m; at most the thickness unless a warning says so.
     pub body_surface_step_m: Option<f32>,

@@ -188,7 +188,7 @@ impl PassPlan {
             | Pass::HashScan
             | Pass::HashFill
             | Pass::SelfCollide => effects.self_collision,
-            Pass::CollideBody => effects.body && model.collider.is_some(),
+            Pass::CollideBody => effects.body && !model.colliders.is_empty(),
             Pass::Monitor => false,
         };
         PassPlan {

@@ -211,7 +211,7 @@ fn run_scene_from(
         eprintln!("drapekit: {note}");
     }
     let mut warnings = prep.warnings.clone();
-    let wants_edges = (prep.model.collider.as_ref()).is_some_and(|c| c.edges.is_some());
+    let wants_edges = (prep.model.colliders.iter()).any(|c| c.edges.is_some());
     if wants_edges && solver.backend_name() == "gpu" {
         warnings.push(
             "edge_contacts is CPU only: the GPU backend tests particles against the SDF \
@@ -347,6 +347,7 @@ fn run_scene_from(
     }
     outputs.push("summary.json".to_string());
     let substeps_run = stats.frames_run as f64 * prep.substeps as f64;
+    let first_body = prep.model.colliders.first();
     let summary = Summary {
         scene: scene.path.display().to_string(),
         backend: solver.backend_name().to_string(),
@@ -405,29 +406,23 @@ fn run_scene_from(
         max_seam_gap_m: stats.seam_gaps.iter().copied().reduce(f32::max),
         seam_gaps_m: stats.seam_gaps.clone(),
         seams_closed_frame: stats.seams_closed_frame,
-        collision_strategy: prep.model.collider.as_ref().map(|c| {
+        bodies: prep.model.colliders.len(),
+        collision_strategy: first_body.map(|c| {
             if solver.backend_name() == "gpu" {
                 "sdf"
             } else {
                 c.strategy.name()
             }
         }),
-        edge_contacts: (prep.model.collider.as_ref())
-            .map(|c| c.edges.is_some() && solver.backend_name() == "cpu"),
-        max_penetration_m: prep
-            .model
-            .collider
-            .as_ref()
-            .map(|_| stats.max_penetration_m),
-        body_contacts: prep.model.collider.as_ref().map(|_| stats.body_contacts),
-        sdf: prep.model.collider.as_ref().map(|c| c.bake.clone()),
-        body_surface_speed_m_s: prep
-            .model
-            .collider
-            .as_ref()
-            .map(|_| prep.body_surface_speed),
-        body_surface_step_m: (prep.model.collider.as_ref())
-            .map(|_| prep.body_surface_speed * prep.params.dt),
+        edge_contacts: first_body.map(|c| c.edges.is_some() && solver.backend_name() == "cpu"),
+        max_penetration_m: first_body.map(|_| stats.max_penetration_m),
+        body_contacts: first_body.map(|_| stats.body_contacts),
+        sdf: first_body.map(|c| c.bake.clone()),
+        body_sdfs: (prep.model.colliders.iter())
+            .map(|c| c.bake.clone())
+            .collect(),
+        body_surface_speed_m_s: first_body.map(|_| prep.body_surface_speed),
+        body_surface_step_m: first_body.map(|_| prep.body_surface_speed * prep.params.dt),
         attached_particles: prep.attached.len(),
         released_after_frame: stats.released_after_frame,
         finite: stats.finite,

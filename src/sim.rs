@@ -4,7 +4,9 @@
 use crate::body::motion::BodyState;
 use crate::error::Error;
 use crate::metrics;
-use crate::model::layout::{SimParams, SubstepParams, INTEGRATOR_IMPLICIT};
+use crate::model::layout::{
+    BodyParams, BodyPose, SimParams, SubstepParams, INTEGRATOR_IMPLICIT, MAX_BODIES,
+};
 use crate::model::BuiltCloth;
 use crate::model::ClothModel;
 use crate::pattern::garment::Garment;
@@ -75,12 +77,12 @@ pub struct Prepared {
     pub max_energy_growth: f32,
     /// A frame with a particle faster than this has diverged, in m/s.
     pub max_speed: f32,
-    /// The body's friction slip speed, from the first frame after every seam is closed (until
-    /// then, `SEWING_SLIP_SPEED`); `None` when nothing switches.
-    pub friction_slip_speed_sewn: Option<f32>,
+    /// The bodies' parameters with their own friction slip speeds, from the first frame after
+    /// every seam is closed (until then, `SEWING_SLIP_SPEED`); `None` when nothing switches.
+    pub friction_slip_speed_sewn: Option<[BodyParams; MAX_BODIES]>,
 }
 
-/// Friction's slip speed (`SimParams::friction_slip_speed`) while a garment is being sewn, in
+/// Friction's slip speed (`BodyParams::friction_slip_speed`) while a garment is being sewn, in
 /// m/s: friction reaches its Coulomb bound μλ only at this slip relative to the body, so the
 /// panels slide onto the body as the seams pull them. With the static value (0.01 m/s) from the
 /// start, the seams' tension wrapping the body pressed the panels on so hard that friction held
@@ -89,11 +91,11 @@ pub struct Prepared {
 pub const SEWING_SLIP_SPEED: f32 = 1.0;
 
 impl Prepared {
-    /// The body's pose and velocity at time `t` (at rest at the origin without a body).
-    pub fn body_state(&self, t: f32) -> BodyState {
+    /// Body `b`'s pose and velocity at time `t` (at rest at the origin past the scene's bodies).
+    pub fn body_state(&self, b: usize, t: f32) -> BodyState {
         self.model
-            .collider
-            .as_ref()
+            .colliders
+            .get(b)
             .map_or(BodyState::REST, |c| c.motion.at(t))
     }
 
@@ -226,10 +228,12 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
             (n as u32, true)
         }
     };
-    if let Some(r) = model.collider.as_ref().map(|c| &c.body.repairs) {
+    for (i, c) in model.colliders.iter().enumerate() {
+        let r = &c.body.repairs;
         if r.flipped_faces > 0 || r.turned_outside_out {
             warnings.push(format!(
-                "body: repaired orientation ({} faces flipped to match their neighbours{})",
+                "{}: repaired orientation ({} faces flipped to match their neighbours{})",
+                scene.body_table(i),
                 r.flipped_faces,
                 if r.turned_outside_out {
                     "; the mesh was inside out and was turned"
@@ -242,25 +246,25 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     // Tunnelling: no body surface point may move more than the thickness in one substep.
     let mut substeps = substeps;
     let mut body_surface_speed = 0.0f32;
-    if let Some(c) = &model.collider {
-        let radius = c
-            .body
-            .mesh
-            .positions
-            .iter()
+    for (i, (c, settings)) in model.colliders.iter().zip(&scene.bodies).enumerate() {
+        let radius = (c.body.mesh.positions.iter())
             .map(|p| p.length())
             .fold(0.0, f32::max);
-        body_surface_speed = c.motion.max_surface_speed(radius);
-        let thickness = scene.body.as_ref().map_or(f32::INFINITY, |b| b.thickness);
-        let needed = (body_surface_speed * frame_dt / thickness).ceil() as u32;
+        let speed = c.motion.max_surface_speed(radius);
+        body_surface_speed = body_surface_speed.max(speed);
+        let thickness = settings.thickness;
+        let needed = (speed * frame_dt / thickness).ceil() as u32;
         if needed > substeps {
             if auto_substeps {
                 substeps = needed;
                 dt_limited_by = "body speed";
             } else {
                 warnings.push(format!(
-                    "the body's surface moves up to {:.2e} m per substep, more than the                      thickness {thickness:.2e} m: particles may tunnel (use substeps = {needed} or \"auto\")",
-                    body_surface_speed * frame_dt / substeps as f32
+                    "{}: its surface moves up to {:.2e} m per substep, more than the \
+                     thickness {thickness:.2e} m: particles may tunnel (use substeps = {needed} \
+                     or \"auto\")",
+                    scene.body_table(i),
+                    speed * frame_dt / substeps as f32
                 ));
             }
         }
@@ -268,8 +272,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     let dt = frame_dt / substeps as f32;
     let colors = implicit.then(|| model.vertex_coloring().colors());
     let wind = scene.wind;
-    let body = scene.body.as_ref();
-    let sdf = model.collider.as_ref().map(|c| &c.sdf);
+    let body = scene.bodies.first();
     let (self_thickness, hash_buckets) = match &scene.self_collision {
         Some(sc) => {
             let mean_edge = model.springs.iter().map(|s| s.rest_length).sum::<f32>()
@@ -303,12 +306,6 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
             0.0
         },
         iterations: s.iterations,
-        sdf_origin: sdf.map_or([0.0, 0.0, 0.0, 1.0], |g| g.origin.extend(g.cell).to_array()),
-        sdf_dims: sdf.map_or([0; 4], |g| [g.dims[0], g.dims[1], g.dims[2], 0]),
-        thickness: body.map_or(0.0, |b| b.thickness),
-        friction: body.map_or(0.0, |b| b.friction),
-        normal_loss: body.map_or(0.0, |b| b.normal_loss),
-        tangential_loss: body.map_or(0.0, |b| b.tangential_loss),
         self_thickness,
         // Cells at least as large as the contact distance: all contacts lie in the 27 cells.
         hash_cell: self_thickness.max(1e-6),
@@ -319,20 +316,15 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         } else {
             0
         },
-        // Soft while a garment is being sewn; the run switches to the body's value once every
-        // seam is closed (see `phase_params`).
-        friction_slip_speed: match (&garment, body) {
-            (Some(_), _) => SEWING_SLIP_SPEED,
-            (None, Some(b)) => b.friction_slip_speed,
-            (None, None) => 0.0,
-        },
         tolerance: s.tolerance.unwrap_or(0.0),
-        _pad5: 0,
+        num_bodies: model.colliders.len() as u32,
+        _pad0: 0,
+        // Friction is soft while a garment is being sewn; the run switches to each body's
+        // slip speed once every seam is closed (see `phase_params`).
+        bodies: body_params(&model, &scene.bodies, garment.is_some()),
     };
-    let friction_slip_speed_sewn = match (&garment, body) {
-        (Some(_), Some(b)) => Some(b.friction_slip_speed),
-        _ => None,
-    };
+    let sewing = garment.is_some() && body.is_some();
+    let friction_slip_speed_sewn = sewing.then(|| body_params(&model, &scene.bodies, false));
     let energy_complete =
         model.seams.is_empty() && (model.hinges.is_empty() || !scene.effects().bending);
     Ok(Prepared {
@@ -381,6 +373,36 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     })
 }
 
+/// Each body's SDF grid (its nodes one after another in the SDF texture, in scene order) and
+/// contact response; friction's slip speed is `SEWING_SLIP_SPEED` while `sewing`.
+fn body_params(
+    model: &ClothModel,
+    bodies: &[crate::scene::BodySettings],
+    sewing: bool,
+) -> [BodyParams; MAX_BODIES] {
+    let mut out = [BodyParams::default(); MAX_BODIES];
+    let mut first_node = 0u32;
+    for ((p, c), b) in out.iter_mut().zip(&model.colliders).zip(bodies) {
+        let g = &c.sdf;
+        *p = BodyParams {
+            sdf_origin: g.origin.extend(g.cell).to_array(),
+            sdf_dims: [g.dims[0], g.dims[1], g.dims[2], first_node],
+            thickness: b.thickness,
+            friction: b.friction,
+            normal_loss: b.normal_loss,
+            tangential_loss: b.tangential_loss,
+            friction_slip_speed: if sewing {
+                SEWING_SLIP_SPEED
+            } else {
+                b.friction_slip_speed
+            },
+            ..Default::default()
+        };
+        first_node += g.values.len() as u32;
+    }
+    out
+}
+
 /// The per-substep values of output frame `frame` (1-based): its time and wind.
 pub fn substep_params(prep: &Prepared, frame: u32) -> Vec<SubstepParams> {
     (0..prep.substeps)
@@ -388,24 +410,34 @@ pub fn substep_params(prep: &Prepared, frame: u32) -> Vec<SubstepParams> {
             let t = ((frame - 1) as f64 * prep.frame_dt as f64 + s as f64 * prep.params.dt as f64)
                 as f32;
             let wind = prep.wind.map_or(glam::Vec3::ZERO, |w| w.at(t));
-            // The body's pose at the end of the substep, where collision is resolved.
-            let body = prep.body_state(t + prep.params.dt);
-            let r = glam::Mat3::from_quat(body.rotation);
+            // Each body's pose at the end of the substep, where collision is resolved.
+            let mut bodies = [BodyPose::default(); MAX_BODIES];
+            for (b, pose) in bodies.iter_mut().enumerate() {
+                *pose = body_pose(&prep.body_state(b, t + prep.params.dt));
+            }
             SubstepParams {
                 wind: wind.extend(0.0).to_array(),
                 time: t,
                 substep: s,
                 _pad0: 0,
                 _pad1: 0,
-                body_x: r.x_axis.extend(0.0).to_array(),
-                body_y: r.y_axis.extend(0.0).to_array(),
-                body_z: r.z_axis.extend(0.0).to_array(),
-                body_translation: body.translation.extend(0.0).to_array(),
-                body_velocity: body.linear_velocity.extend(0.0).to_array(),
-                body_angular_velocity: body.angular_velocity.extend(0.0).to_array(),
+                bodies,
             }
         })
         .collect()
+}
+
+/// A body's pose as the kernels read it.
+pub fn body_pose(body: &BodyState) -> BodyPose {
+    let r = glam::Mat3::from_quat(body.rotation);
+    BodyPose {
+        x: r.x_axis.extend(0.0).to_array(),
+        y: r.y_axis.extend(0.0).to_array(),
+        z: r.z_axis.extend(0.0).to_array(),
+        translation: body.translation.extend(0.0).to_array(),
+        velocity: body.linear_velocity.extend(0.0).to_array(),
+        angular_velocity: body.angular_velocity.extend(0.0).to_array(),
+    }
 }
 
 /// Why a run ended early.
@@ -625,15 +657,17 @@ pub fn simulate_from(
         stats.last_edge_strain = strain;
         stats.kinetic_energy_j = health.kinetic_energy;
         stats.seam_gaps = seam_gaps(&state);
-        if let Some(c) = &prep.model.collider {
-            let body = prep.body_state(frame as f32 * prep.frame_dt);
+        let mut touching = vec![false; state.positions.len()];
+        for (b, c) in prep.model.colliders.iter().enumerate() {
+            let body = prep.body_state(b, frame as f32 * prep.frame_dt);
             let distances = metrics::body_distances(c, &body, &state.positions);
             stats.max_penetration_m = stats
                 .max_penetration_m
                 .max(metrics::max_penetration(&distances));
-            stats.body_contacts =
-                metrics::body_contacts(&distances, prep.params.thickness + CONTACT_SLACK);
+            let reach = prep.params.bodies[b].thickness + CONTACT_SLACK;
+            metrics::mark_contacts(&distances, reach, &mut touching);
         }
+        stats.body_contacts = touching.iter().filter(|&&t| t).count();
         let all_closed = stats.seam_gaps.iter().all(|&g| g < prep.seam_closed_gap);
         if !stats.seam_gaps.is_empty() && all_closed && stats.seams_closed_frame.is_none() {
             stats.seams_closed_frame = Some(frame);
@@ -658,8 +692,8 @@ pub fn phase_params(prep: &Prepared, frame: u32, stats: &RunStats) -> SimParams 
     if prep.gravity.1 > 0 && frame >= prep.gravity.1 {
         params.gravity = prep.gravity.0.extend(0.0).to_array();
     }
-    if let (Some(slip), Some(_)) = (prep.friction_slip_speed_sewn, stats.seams_closed_frame) {
-        params.friction_slip_speed = slip;
+    if let (Some(sewn), Some(_)) = (prep.friction_slip_speed_sewn, stats.seams_closed_frame) {
+        params.bodies = sewn;
     }
     params
 }

@@ -131,7 +131,7 @@ fn particle_estimates_are_close_for_the_shipped_garments() {
     for scene in ["tshirt_drape_cotton.toml", "skirt_rotating.toml"] {
         let mut scene =
             drapekit::scene::Scene::load(&common::fixture(&format!("scenes/{scene}"))).unwrap();
-        scene.body = None;
+        scene.bodies.clear();
         let estimate = drapekit::model::budget::estimated_particles(&scene)
             .unwrap()
             .unwrap() as f64;

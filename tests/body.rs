@@ -234,9 +234,9 @@ fn recorded_state(prep: &drapekit::sim::Prepared) -> drapekit::solver::ParticleS
 #[test]
 fn strategies_find_the_same_contacts() {
     let prep = touching_sphere();
-    let c = prep.model.collider.as_ref().unwrap();
+    let c = &prep.model.colliders[0];
     let state = recorded_state(&prep);
-    let thickness = prep.params.thickness;
+    let thickness = prep.params.bodies[0].thickness;
     let mut contacts = [Vec::new(), Vec::new(), Vec::new()];
     for (i, p) in state.positions.iter().enumerate() {
         let p = p.truncate();
@@ -369,9 +369,9 @@ fn shipped_mannequins_are_closed_and_their_sign_agrees_with_the_winding_number()
 fn bvh_strategies_agree_with_exact_on_a_recorded_state() {
     use drapekit::body::bvh::{BodyBvh, VolumeKind};
     let prep = touching_sphere();
-    let c = prep.model.collider.as_ref().unwrap();
+    let c = &prep.model.colliders[0];
     let state = recorded_state(&prep);
-    let thickness = prep.params.thickness;
+    let thickness = prep.params.bodies[0].thickness;
     // The mannequin too: a real, non-convex body with thin parts.
     let mannequin = Body::load(
         &fixture("bodies/mannequin_lowpoly.obj"),
@@ -427,7 +427,7 @@ fn rotating_skirt_stays_on_and_out_of_the_mannequin() {
     // on the GPU path when there is an adapter (lavapipe is faster than the CPU path here).
     let scene = Scene::load(&fixture("scenes/skirt_rotating.toml")).unwrap();
     let prep = prepare(&scene).unwrap();
-    let c = prep.model.collider.as_ref().unwrap();
+    let c = &prep.model.colliders[0];
     assert!(c.motion.max_surface_speed(1.0) > 1.0, "the body turns");
     let mut solver: Box<dyn Solver> = match gpu() {
         Some(ctx) => Box::new(
@@ -456,7 +456,7 @@ fn rotating_skirt_stays_on_and_out_of_the_mannequin() {
         Ok(())
     })
     .unwrap();
-    let thickness = prep.params.thickness;
+    let thickness = prep.params.bodies[0].thickness;
     // Measured at every output frame against the exact mannequin mesh.
     assert!(
         stats.max_penetration_m <= thickness,
@@ -521,17 +521,17 @@ fn body_edges_find_the_nearest_edge_of_a_box() {
 #[test]
 fn an_edge_contact_moves_the_contact_point_out_and_stops_it() {
     use drapekit::body::edges::EdgeContact;
-    use drapekit::model::layout::{SimParams, SubstepParams};
-    let params = SimParams {
+    use drapekit::model::layout::{BodyParams, BodyPose};
+    let body = BodyParams {
         thickness: 0.003,
         friction: 0.5,
-        ..SimParams::default()
+        ..BodyParams::default()
     };
-    let step = SubstepParams {
-        body_x: [1.0, 0.0, 0.0, 0.0],
-        body_y: [0.0, 1.0, 0.0, 0.0],
-        body_z: [0.0, 0.0, 1.0, 0.0],
-        ..SubstepParams::default()
+    let pose = BodyPose {
+        x: [1.0, 0.0, 0.0, 0.0],
+        y: [0.0, 1.0, 0.0, 0.0],
+        z: [0.0, 0.0, 1.0, 0.0],
+        ..BodyPose::default()
     };
     // Equal masses; the contact sits a quarter of the way along, touching the body edge.
     let mut pos = vec![
@@ -545,7 +545,7 @@ fn an_edge_contact_moves_the_contact_point_out_and_stops_it() {
         normal: Vec3::Y,
         distance: 0.0,
     };
-    drapekit::cpu::collide_edge(&params, &step, &mut pos, &mut vel, [0, 1], &c);
+    drapekit::cpu::collide_edge(&body, &pose, &mut pos, &mut vel, [0, 1], &c);
     let lerp = |v: &[glam::Vec4]| v[0].truncate().lerp(v[1].truncate(), c.s);
     // The contact point ends one thickness out (f32 rounding of mm-sized sums: 1e-9 m).
     assert!((lerp(&pos) - Vec3::new(0.01, 0.003, 0.0)).length() < 1e-9);
@@ -563,7 +563,7 @@ fn cloth_edges_catch_on_a_thin_bar_only_with_edge_contacts() {
     let (lo, hi) = (Vec3::new(-0.002, 0.498, -0.3), Vec3::new(0.002, 0.502, 0.3));
     for edge_contacts in [true, false] {
         let mut scene = Scene::load(&fixture("scenes/drape_bar.toml")).unwrap();
-        scene.body.as_mut().unwrap().edge_contacts = edge_contacts;
+        scene.bodies[0].edge_contacts = edge_contacts;
         let prep = prepare(&scene).unwrap();
         let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
         let mut crossing = 0;
@@ -629,6 +629,6 @@ fn the_built_in_mannequin_is_the_shipped_file_standing_on_its_feet() {
     )
     .unwrap();
     let prep = prepare(&Scene::load(&path).unwrap()).unwrap();
-    let c = prep.model.collider.as_ref().unwrap();
+    let c = &prep.model.colliders[0];
     assert_eq!(c.body.mesh.positions.len(), 13_380);
 }

@@ -111,7 +111,7 @@ fn skirt_on_a_turning_body_exports_obj_body_pc2_and_glb() {
     // last, 5, off the schedule.
     let mut scene = Scene::load(&common::fixture("scenes/skirt_rotating_implicit.toml")).unwrap();
     assert!(scene.output.pc2 && scene.output.gltf);
-    let body = scene.body.as_mut().unwrap();
+    let body = &mut scene.bodies[0];
     body.motion = Motion::turn_right_left(60.0, 1.0, 0.0);
     scene.output.every = 2;
     let out = out_dir("skirt");
@@ -165,7 +165,7 @@ fn skirt_on_a_turning_body_exports_obj_body_pc2_and_glb() {
 
     // Body: world coordinates at each frame's time (frame × frame length, as the run loop
     // times frames); the same f32 arithmetic and exact printing give the very same numbers.
-    let c = prep.model.collider.as_ref().unwrap();
+    let c = &prep.model.colliders[0];
     let time = |f: u32| f as f32 * prep.frame_dt;
     for f in written {
         let pose = c.motion.at(time(f));

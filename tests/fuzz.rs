@@ -84,7 +84,7 @@ fn exercise(text: &str, path: &std::path::Path) {
     };
     // Bodies bake an SDF per new resolution (seconds each): their loading is fuzzed, not
     // their runs. Large or many-substep scenes are refused by their own checks or skipped.
-    if scene.body.is_some() {
+    if !scene.bodies.is_empty() {
         return;
     }
     scene.solver.frames = 1;

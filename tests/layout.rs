@@ -2,7 +2,9 @@
 //! every field offset, as naga lays the WGSL structs out.
 
 use drapekit::gpu::kernels::{validate_wgsl, COMMON_WGSL};
-use drapekit::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep};
+use drapekit::model::layout::{
+    BodyParams, BodyPose, Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep,
+};
 use std::mem::{offset_of, size_of};
 
 fn wgsl_layout(name: &str) -> (u32, Vec<(String, u32)>) {
@@ -46,12 +48,6 @@ fn sim_params_layout() {
             ("drag_coefficient", offset_of!(SimParams, drag_coefficient)),
             ("sewing_rate", offset_of!(SimParams, sewing_rate)),
             ("iterations", offset_of!(SimParams, iterations)),
-            ("sdf_origin", offset_of!(SimParams, sdf_origin)),
-            ("sdf_dims", offset_of!(SimParams, sdf_dims)),
-            ("thickness", offset_of!(SimParams, thickness)),
-            ("friction", offset_of!(SimParams, friction)),
-            ("normal_loss", offset_of!(SimParams, normal_loss)),
-            ("tangential_loss", offset_of!(SimParams, tangential_loss)),
             ("self_thickness", offset_of!(SimParams, self_thickness)),
             ("hash_cell", offset_of!(SimParams, hash_cell)),
             ("hash_buckets", offset_of!(SimParams, hash_buckets)),
@@ -60,12 +56,49 @@ fn sim_params_layout() {
                 "strain_iterations",
                 offset_of!(SimParams, strain_iterations),
             ),
+            ("tolerance", offset_of!(SimParams, tolerance)),
+            ("num_bodies", offset_of!(SimParams, num_bodies)),
+            ("_pad0", offset_of!(SimParams, _pad0)),
+            ("bodies", offset_of!(SimParams, bodies)),
+        ],
+    );
+}
+
+#[test]
+fn body_params_layout() {
+    check(
+        "BodyParams",
+        size_of::<BodyParams>(),
+        &[
+            ("sdf_origin", offset_of!(BodyParams, sdf_origin)),
+            ("sdf_dims", offset_of!(BodyParams, sdf_dims)),
+            ("thickness", offset_of!(BodyParams, thickness)),
+            ("friction", offset_of!(BodyParams, friction)),
+            ("normal_loss", offset_of!(BodyParams, normal_loss)),
+            ("tangential_loss", offset_of!(BodyParams, tangential_loss)),
             (
                 "friction_slip_speed",
-                offset_of!(SimParams, friction_slip_speed),
+                offset_of!(BodyParams, friction_slip_speed),
             ),
-            ("tolerance", offset_of!(SimParams, tolerance)),
-            ("_pad5", offset_of!(SimParams, _pad5)),
+            ("_pad0", offset_of!(BodyParams, _pad0)),
+            ("_pad1", offset_of!(BodyParams, _pad1)),
+            ("_pad2", offset_of!(BodyParams, _pad2)),
+        ],
+    );
+}
+
+#[test]
+fn body_pose_layout() {
+    check(
+        "BodyPose",
+        size_of::<BodyPose>(),
+        &[
+            ("x", offset_of!(BodyPose, x)),
+            ("y", offset_of!(BodyPose, y)),
+            ("z", offset_of!(BodyPose, z)),
+            ("translation", offset_of!(BodyPose, translation)),
+            ("velocity", offset_of!(BodyPose, velocity)),
+            ("angular_velocity", offset_of!(BodyPose, angular_velocity)),
         ],
     );
 }
@@ -81,18 +114,7 @@ fn substep_params_layout() {
             ("substep", offset_of!(SubstepParams, substep)),
             ("_pad0", offset_of!(SubstepParams, _pad0)),
             ("_pad1", offset_of!(SubstepParams, _pad1)),
-            ("body_x", offset_of!(SubstepParams, body_x)),
-            ("body_y", offset_of!(SubstepParams, body_y)),
-            ("body_z", offset_of!(SubstepParams, body_z)),
-            (
-                "body_translation",
-                offset_of!(SubstepParams, body_translation),
-            ),
-            ("body_velocity", offset_of!(SubstepParams, body_velocity)),
-            (
-                "body_angular_velocity",
-                offset_of!(SubstepParams, body_angular_velocity),
-            ),
+            ("bodies", offset_of!(SubstepParams, bodies)),
         ],
     );
 }
@@ -178,7 +200,8 @@ fn wgsl_const(name: &str) -> u32 {
 
 #[test]
 fn shared_constants_match() {
-    use drapekit::model::layout::{TEXELS_PER_ROW, WORKGROUP_SIZE};
+    use drapekit::model::layout::{MAX_BODIES, TEXELS_PER_ROW, WORKGROUP_SIZE};
+    assert_eq!(wgsl_const("MAX_BODIES") as usize, MAX_BODIES);
     assert_eq!(wgsl_const("TEXELS_PER_ROW"), TEXELS_PER_ROW);
     assert_eq!(wgsl_const("WORKGROUP_SIZE"), WORKGROUP_SIZE);
     assert_eq!(

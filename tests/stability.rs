@@ -3,8 +3,6 @@
 //! the springs and the seams could have supplied, that strain stays under its limit, and that
 //! penetration stays under its bound where a body is present. Cases that must diverge must
 //! stop with the divergence error before handing out a bad frame.
-//!
-//! Not here: cloth pinched between two closing bodies (a scene has one rigid body).
 
 mod common;
 
@@ -38,6 +36,8 @@ struct Outcome {
     frames: Vec<(bool, f32, f64, f64)>,
     /// (mechanical energy, kinetic + elastic) per frame, from the monitor.
     energies: Vec<(f64, f64)>,
+    /// The last frame handed out.
+    last: Option<drapekit::solver::ParticleState>,
 }
 
 fn solvers(prep: &Prepared) -> Vec<Box<dyn Solver>> {
@@ -72,7 +72,9 @@ fn run(prep: &Prepared, solver: &mut dyn Solver) -> Outcome {
     let mut start = None;
     let mut frames = Vec::new();
     let mut energies = Vec::new();
+    let mut last = None;
     let mut stats = RunStats::default();
+    let clock = std::time::Instant::now();
     let result = simulate_from(prep, solver, &mut stats, None, |_, s, st| {
         let finite = s
             .positions
@@ -87,13 +89,22 @@ fn run(prep: &Prepared, solver: &mut dyn Solver) -> Outcome {
         if let Some(e) = st.energy {
             energies.push(e);
         }
+        last = Some(s.clone());
         Ok(())
     });
+    eprintln!(
+        "{} × {} substeps on {}: {:.1} s",
+        prep.frames,
+        prep.substeps,
+        solver.backend_name(),
+        clock.elapsed().as_secs_f64()
+    );
     Outcome {
         result,
         stats,
         frames,
         energies,
+        last,
     }
 }
 
@@ -140,7 +151,10 @@ fn strain_with_body(prep: &Prepared) -> f32 {
     let shortest = (prep.model.springs.iter())
         .map(|s| s.rest_length)
         .fold(f32::MAX, f32::min);
-    prep.params.strain_limit + 2.0 * prep.params.thickness / shortest
+    let thickness = (prep.params.bodies.iter())
+        .map(|b| b.thickness)
+        .fold(0.0, f32::max);
+    prep.params.strain_limit + 2.0 * thickness / shortest
 }
 
 /// The seams' energy as placed, ½k|gap|² per pair: all the work they can do on the cloth.
@@ -229,20 +243,21 @@ fn on_sphere(preset: &str, density: f64, integrator: &str) -> Scene {
         &format!("sphere-{preset}-{integrator}"),
         &format!(
             "[cloth.grid]\nwidth_m = 0.8\nheight_m = 0.8\ncolumns = 16\nrows = 16\n\
-             center_m = [0.0, 0.4, 0.0]\nplane = \"xz\"\n\
+             center_m = [0.0, 0.33, 0.0]\nplane = \"xz\"\n\
              [fabric]\npreset = \"{preset}\"\ndensity_kg_m2 = {density}\n\
              [body]\nshape = \"sphere\"\ncenter_m = [0.0, 0.0, 0.0]\nradius_m = 0.3\n\
              sdf_resolution_m = 0.01\nthickness_m = 0.003\nfriction = 0.3\n\
              [world]\ngravity_m_s2 = [0.0, -9.81, 0.0]\nair_damping_per_s = 0.2\n\
-             [solver]\nfps = 24\nframes = 10\nintegrator = \"{integrator}\"\n"
+             [solver]\nfps = 24\nframes = 6\nintegrator = \"{integrator}\"\n"
         ),
     )
 }
 
 #[test]
 fn light_silk_and_heavy_leather_on_the_same_body() {
-    // 20 g/m² silk and 800 g/m² leather at their presets' stiffness. Penetration: the sphere
-    // tests' 1 mm (SDF sampling error at 1 cm cells), against the exact sphere.
+    // 20 g/m² silk and 800 g/m² leather at their presets' stiffness, dropped from 3 cm above the
+    // sphere (contact at 78 ms, frame 2) and wrapping it until frame 6. Penetration: the
+    // sphere tests' 1 mm (SDF sampling error at 1 cm cells), against the exact sphere.
     for (preset, density) in [("silk", 0.02), ("leather", 0.8)] {
         for (_, name) in INTEGRATORS {
             let prep = prepare(&on_sphere(preset, density, name)).unwrap();
@@ -259,21 +274,22 @@ fn light_silk_and_heavy_leather_on_the_same_body() {
 
 #[test]
 fn a_body_turning_at_720_degrees_per_second_does_not_let_cloth_through() {
-    // The soft skirt sewn on the mannequin, which then turns 60° in 1/12 s (720°/s) four
-    // times. Penetration: the rotating-skirt test's bound, the 3 mm thickness.
+    // The soft skirt sewn on the mannequin (seams closed at 0.3 s), which then turns 60° right
+    // in 1/12 s (720°/s) from 0.35 s and 120° left over the next 1/6 s, the last frame
+    // (0.625 s) just after. Penetration: the rotating-skirt test's bound, the 3 mm thickness.
     let text = std::fs::read_to_string(fixture("scenes/skirt_rotating.toml")).unwrap();
     for (_, name) in INTEGRATORS {
         let text = text
             .replace("turn_period_s = 1.0", "turn_period_s = 0.083333")
-            .replace("motion_start_s = 1.5", "motion_start_s = 0.5")
-            .replace("frames = 132", "frames = 20")
+            .replace("motion_start_s = 1.5", "motion_start_s = 0.35")
+            .replace("frames = 132", "frames = 15")
             .replace(
                 "integrator = \"symplectic\"",
                 &format!("integrator = \"{name}\""),
             );
         let prep = prepare(&scene_from_text(&format!("turning-{name}"), &text)).unwrap();
-        let c = prep.model.collider.as_ref().unwrap();
-        let spin = c.motion.at(0.55).angular_velocity.length().to_degrees();
+        let c = &prep.model.colliders[0];
+        let spin = c.motion.at(0.4).angular_velocity.length().to_degrees();
         assert!(spin >= 719.0, "the body turns at {spin}°/s");
         for mut solver in solvers(&prep) {
             let o = run(&prep, solver.as_mut());
@@ -286,6 +302,98 @@ fn a_body_turning_at_720_degrees_per_second_does_not_let_cloth_through() {
             assert_healthy(&case, &prep, &o, strain_with_body(&prep), carried + seams);
             let depth = o.stats.max_penetration_m;
             assert!(depth <= 3e-3, "{case}: penetration {depth} m");
+        }
+    }
+}
+
+#[test]
+fn cloth_pinched_between_two_closing_boxes() {
+    // The shipped two-body scene: cloth draped on a box, a second box closing on it to a 4.5 mm
+    // gap, 1.5× the 3 mm thickness, so both contact shells claim the pinched cloth; 8 frames,
+    // the clamp closed from 0.2 s (frame 4.8). Every integrator on a soft fabric (the subject
+    // here is the pinch; stiffness is the first case's, and cotton's explicit step would take
+    // 13,869 substeps a frame), and the scene as shipped: cotton, implicit. Penetration: the
+    // sphere tests' 1 mm of SDF error (the boxes' faces are flat, where trilinear interpolation
+    // is exact, so the pinched cloth itself lies outside both: the later body puts it at the
+    // thickness, 1.5 mm from the other's face).
+    let shipped = std::fs::read_to_string(fixture("scenes/cloth_pinched.toml")).unwrap();
+    let shipped = shipped.replace("frames = 18", "frames = 8");
+    let soft = shipped.replace(
+        "preset = \"cotton\"",
+        "density_kg_m2 = 0.15\nstretch_stiffness_n_m = 300.0\n\
+         bending_stiffness_n_m = 2e-5\ndamping_ratio = 0.1",
+    );
+    let mut cases: Vec<(String, String)> = (INTEGRATORS.iter())
+        .map(|(_, name)| {
+            let text = soft.replace(
+                "integrator = \"implicit\"",
+                &format!("integrator = \"{name}\""),
+            );
+            (format!("soft, {name}"), text)
+        })
+        .collect();
+    cases.push(("cotton, implicit".into(), shipped.clone()));
+    for (label, text) in cases {
+        let prep = prepare(&scene_from_text(
+            &format!("pinched-{}", label.replace(", ", "-")),
+            &text,
+        ))
+        .unwrap();
+        assert_eq!(prep.model.colliders.len(), 2);
+        // The clamp's footprint (it moves only along y) and its gap to the table's top (y = 0).
+        let clamp = &prep.model.colliders[1];
+        let t_end = prep.frames as f32 * prep.frame_dt;
+        let pose = prep.body_state(1, t_end);
+        let (lo, hi) = (clamp.body.mesh.positions.iter())
+            .fold((glam::Vec3::MAX, glam::Vec3::MIN), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            });
+        let gap = lo.y + pose.translation.y;
+        assert!(
+            (gap - 0.0045).abs() < 1e-6,
+            "the clamp stops {gap} m above the table"
+        );
+        let under = |p: &glam::Vec3| p.x > lo.x && p.x < hi.x && p.z > lo.z && p.z < hi.z;
+        let at_rest_under = prep.model.positions.iter().filter(|p| under(p)).count();
+        for mut solver in solvers(&prep) {
+            let o = run(&prep, solver.as_mut());
+            let case = format!("pinched, {label}, {}", solver.backend_name());
+            // The closing box does work on the cloth: allow the kinetic energy of all of it
+            // moving at the box's speed.
+            let total: f64 = prep.model.masses.iter().map(|&m| m as f64).sum();
+            let carried = 0.5 * total * (prep.body_surface_speed as f64).powi(2);
+            assert_healthy(&case, &prep, &o, strain_with_body(&prep), carried);
+            let depth = o.stats.max_penetration_m;
+            assert!(depth <= 1e-3, "{case}: penetration {depth} m");
+            // The cloth is pinched: every particle under the clamp at the end lies within
+            // reach of both boxes, and at least as many lie there as under it at the start
+            // (the clamp holds the cloth: nothing squeezed out).
+            let last = o.last.as_ref().expect("frames were handed out");
+            let near = |b: usize| {
+                let pose = prep.body_state(b, t_end);
+                let d = drapekit::metrics::body_distances(
+                    &prep.model.colliders[b],
+                    &pose,
+                    &last.positions,
+                );
+                let reach = prep.params.bodies[b].thickness + drapekit::sim::CONTACT_SLACK;
+                d.iter().map(|&d| d <= reach).collect::<Vec<bool>>()
+            };
+            let (table, clamped) = (near(0), near(1));
+            let under_now: Vec<usize> = (0..last.positions.len())
+                .filter(|&i| under(&last.positions[i].truncate()))
+                .collect();
+            assert!(
+                under_now.len() >= at_rest_under && at_rest_under > 0,
+                "{case}: {} particles under the clamp, {at_rest_under} at the start",
+                under_now.len()
+            );
+            for &i in &under_now {
+                assert!(
+                    table[i] && clamped[i],
+                    "{case}: particle {i} under the clamp is not pinched"
+                );
+            }
         }
     }
 }

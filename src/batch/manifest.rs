@@ -192,7 +192,7 @@ fn parse_line(
         ClothSource::Mesh { path, .. } => referenced.push(("cloth mesh", path.clone())),
         ClothSource::Grid { .. } => {}
     }
-    if let Some(BodySource::Mesh { path, .. }) = scene.body.as_ref().map(|b| &b.source) {
+    if let Some(BodySource::Mesh { path, .. }) = scene.bodies.first().map(|b| &b.source) {
         referenced.push(("body", path.clone()));
     }
     let mut hasher = Sha256::new();

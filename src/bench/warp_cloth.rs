@@ -99,7 +99,7 @@ pub fn model(dim: u32) -> ClothModel {
         springs,
         hinges: Vec::new(),
         seams: Vec::new(),
-        collider: None,
+        colliders: Vec::new(),
     }
 }
 

@@ -2,7 +2,7 @@
 //! queries (the CPU collision strategies).
 
 use crate::body::sdf::sdf_sample;
-use crate::model::layout::{SimParams, SubstepParams};
+use crate::model::layout::{BodyParams, BodyPose, SimParams, SubstepParams};
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -10,66 +10,65 @@ fn v3(a: [f32; 4]) -> Vec3 {
     Vec3::new(a[0], a[1], a[2])
 }
 
-/// World point `x` in the body frame of this substep's pose (`d` is `x` − the body's origin).
-pub fn to_body_frame(step: &SubstepParams, x: Vec3) -> (Vec3, Vec3) {
-    let (bx, by, bz) = (v3(step.body_x), v3(step.body_y), v3(step.body_z));
-    let d = x - v3(step.body_translation);
+/// World point `x` in the body frame of `pose` (`d` is `x` − the body's origin).
+pub fn to_body_frame(pose: &BodyPose, x: Vec3) -> (Vec3, Vec3) {
+    let (bx, by, bz) = (v3(pose.x), v3(pose.y), v3(pose.z));
+    let d = x - v3(pose.translation);
     (Vec3::new(bx.dot(d), by.dot(d), bz.dot(d)), d)
 }
 
 /// A body-frame direction (an SDF gradient) in the world.
-pub fn to_world(step: &SubstepParams, g: Vec3) -> Vec3 {
-    v3(step.body_x) * g.x + v3(step.body_y) * g.y + v3(step.body_z) * g.z
+pub fn to_world(pose: &BodyPose, g: Vec3) -> Vec3 {
+    v3(pose.x) * g.x + v3(pose.y) * g.y + v3(pose.z) * g.z
 }
 
 /// The velocity of the body's surface at offset `d` from its origin.
-pub fn body_velocity_at(step: &SubstepParams, d: Vec3) -> Vec3 {
-    v3(step.body_velocity) + v3(step.body_angular_velocity).cross(d)
+pub fn body_velocity_at(pose: &BodyPose, d: Vec3) -> Vec3 {
+    v3(pose.velocity) + v3(pose.angular_velocity).cross(d)
 }
 
-/// φ (w) and ∇φ (xyz) of the body's SDF (grid in `params`) at body-frame point `p`.
-pub fn sample_body_sdf(params: &SimParams, sdf: &[f32], p: Vec3) -> Vec4 {
-    let dims = [params.sdf_dims[0], params.sdf_dims[1], params.sdf_dims[2]];
-    sdf_sample(sdf, dims, v3(params.sdf_origin), params.sdf_origin[3], p)
+/// φ (w) and ∇φ (xyz) of a body's SDF (grid in `body`, nodes in `sdf`, the body's own) at
+/// body-frame point `p`.
+pub fn sample_body_sdf(body: &BodyParams, sdf: &[f32], p: Vec3) -> Vec4 {
+    let dims = [body.sdf_dims[0], body.sdf_dims[1], body.sdf_dims[2]];
+    sdf_sample(sdf, dims, v3(body.sdf_origin), body.sdf_origin[3], p)
 }
 
-/// One particle's collision response. `query` gives φ (w) and ∇φ (xyz) at a body-frame point.
+/// One body's collision response to a particle at `x` with velocity `v`. `query` gives φ (w)
+/// and ∇φ (xyz) at a body-frame point.
 pub fn collide_particle(
-    params: &SimParams,
-    step: &SubstepParams,
-    p: Vec4,
+    body: &BodyParams,
+    pose: &BodyPose,
+    x: Vec3,
     v: Vec3,
     query: impl Fn(Vec3) -> Vec4,
-) -> (Vec4, Vec3) {
-    let mut x = p.truncate();
-    let mut v_new = v;
-    if p.w != 0.0 {
-        let (xb, _) = to_body_frame(step, x);
-        let s = query(xb);
-        if s.w < params.thickness {
-            let n = safe_normalize(to_world(step, s.truncate()));
-            if n.dot(n) > 0.0 {
-                x += (params.thickness - s.w) * n;
-                let v_body = body_velocity_at(step, x - v3(step.body_translation));
-                let v_rel = v - v_body;
-                let mut vn = v_rel.dot(n);
-                let mut vt = v_rel - vn * n;
-                if vn < 0.0 {
-                    // Coulomb: tangential speed drops by μ times the normal speed taken away.
-                    let vt_len = vt.length();
-                    if vt_len > 0.0 {
-                        vt *= (1.0 - params.friction * (-vn) / vt_len).max(0.0);
-                    }
-                    vn = 0.0;
-                } else {
-                    vn *= 1.0 - params.normal_loss;
-                }
-                vt *= 1.0 - params.tangential_loss;
-                v_new = v_body + vt + vn * n;
-            }
-        }
+) -> (Vec3, Vec3) {
+    let (xb, _) = to_body_frame(pose, x);
+    let s = query(xb);
+    if s.w >= body.thickness {
+        return (x, v);
     }
-    (x.extend(p.w), v_new)
+    let n = safe_normalize(to_world(pose, s.truncate()));
+    if n.dot(n) == 0.0 {
+        return (x, v);
+    }
+    let x = x + (body.thickness - s.w) * n;
+    let v_body = body_velocity_at(pose, x - v3(pose.translation));
+    let v_rel = v - v_body;
+    let mut vn = v_rel.dot(n);
+    let mut vt = v_rel - vn * n;
+    if vn < 0.0 {
+        // Coulomb: tangential speed drops by μ times the normal speed taken away.
+        let vt_len = vt.length();
+        if vt_len > 0.0 {
+            vt *= (1.0 - body.friction * (-vn) / vt_len).max(0.0);
+        }
+        vn = 0.0;
+    } else {
+        vn *= 1.0 - body.normal_loss;
+    }
+    vt *= 1.0 - body.tangential_loss;
+    (x, v_body + vt + vn * n)
 }
 
 fn safe_normalize(v: Vec3) -> Vec3 {
@@ -81,22 +80,30 @@ fn safe_normalize(v: Vec3) -> Vec3 {
     }
 }
 
-/// Collides every particle with the body through the SDF (in place: each particle reads and
-/// writes only its own state, so particles run in parallel).
+/// Collides every particle with every body through its SDF (`sdfs[b]` holds body b's nodes), the
+/// bodies in scene order (in place: each particle reads and writes only its own state, so
+/// particles run in parallel).
 pub fn collide_body(
     params: &SimParams,
     step: &SubstepParams,
     pos: &mut [Vec4],
     vel: &mut [Vec4],
-    sdf: &[f32],
+    sdfs: &[&[f32]],
 ) {
     let n = params.num_particles as usize;
     let state = (&mut pos[..n], &mut vel[..n]);
     state.into_par_iter().for_each(|(pos, vel)| {
-        let (x, v) = collide_particle(params, step, *pos, vel.truncate(), |p| {
-            sample_body_sdf(params, sdf, p)
-        });
-        *pos = x;
+        if pos.w == 0.0 {
+            return;
+        }
+        let (mut x, mut v) = (pos.truncate(), vel.truncate());
+        for (b, sdf) in sdfs.iter().enumerate().take(params.num_bodies as usize) {
+            let body = &params.bodies[b];
+            (x, v) = collide_particle(body, &step.bodies[b], x, v, |p| {
+                sample_body_sdf(body, sdf, p)
+            });
+        }
+        *pos = x.extend(pos.w);
         *vel = v.extend(0.0);
     });
 }
@@ -107,8 +114,8 @@ pub fn collide_body(
 /// between the edge's ends with weights (1 − s) and s over their inverse masses, the smallest
 /// change that moves the contact point by the full amount.
 pub fn collide_edge(
-    params: &SimParams,
-    step: &SubstepParams,
+    body: &BodyParams,
+    pose: &BodyPose,
     pos: &mut [Vec4],
     vel: &mut [Vec4],
     e: [u32; 2],
@@ -118,61 +125,54 @@ pub fn collide_edge(
     let w = [1.0 - c.s, c.s];
     let inv_mass = [pos[i].w, pos[j].w];
     let denom = w[0] * w[0] * inv_mass[0] + w[1] * w[1] * inv_mass[1];
-    if denom <= 0.0 || c.distance >= params.thickness {
+    if denom <= 0.0 || c.distance >= body.thickness {
         return;
     }
     let share = [w[0] * inv_mass[0] / denom, w[1] * inv_mass[1] / denom];
-    let (bx, by, bz) = (v3(step.body_x), v3(step.body_y), v3(step.body_z));
-    let n = bx * c.normal.x + by * c.normal.y + bz * c.normal.z;
-    let push = (params.thickness - c.distance) * n;
+    let n = to_world(pose, c.normal);
+    let push = (body.thickness - c.distance) * n;
     for (k, &p) in [i, j].iter().enumerate() {
         pos[p] += (share[k] * push).extend(0.0);
     }
-    let t = v3(step.body_translation);
     let x = pos[i].truncate().lerp(pos[j].truncate(), c.s);
     let v = vel[i].truncate().lerp(vel[j].truncate(), c.s);
-    let v_body = v3(step.body_velocity) + v3(step.body_angular_velocity).cross(x - t);
+    let v_body = body_velocity_at(pose, x - v3(pose.translation));
     let v_rel = v - v_body;
     let vn = v_rel.dot(n);
     let mut vt = v_rel - vn * n;
     let vn_new = if vn < 0.0 {
         let vt_len = vt.length();
         if vt_len > 0.0 {
-            vt *= (1.0 - params.friction * (-vn) / vt_len).max(0.0);
+            vt *= (1.0 - body.friction * (-vn) / vt_len).max(0.0);
         }
         0.0
     } else {
-        vn * (1.0 - params.normal_loss)
+        vn * (1.0 - body.normal_loss)
     };
-    vt *= 1.0 - params.tangential_loss;
+    vt *= 1.0 - body.tangential_loss;
     let change = vt + vn_new * n - v_rel;
     for (k, &p) in [i, j].iter().enumerate() {
         vel[p] += (share[k] * change).extend(0.0);
     }
 }
 
-/// Every cloth edge against the body's edges (CPU only; after the particle pass), one contact
-/// per edge: its deepest. Does nothing unless the collider carries its edges.
+/// Every cloth edge against a body's edges (CPU only; after the particle pass), one contact per
+/// edge: its deepest. Does nothing unless the collider carries its edges.
 pub fn collide_edges(
-    params: &SimParams,
-    step: &SubstepParams,
+    body: &BodyParams,
+    pose: &BodyPose,
     pos: &mut [Vec4],
     vel: &mut [Vec4],
     cloth_edges: &[[u32; 2]],
     collider: &crate::body::Collider,
 ) {
     let Some(edges) = &collider.edges else { return };
-    let (bx, by, bz) = (v3(step.body_x), v3(step.body_y), v3(step.body_z));
-    let t = v3(step.body_translation);
-    let to_body = |x: Vec4| {
-        let d = x.truncate() - t;
-        Vec3::new(bx.dot(d), by.dot(d), bz.dot(d))
-    };
+    let to_body = |x: Vec4| to_body_frame(pose, x.truncate()).0;
     let inside = |x: Vec3| collider.exact.query(x).0 < 0.0;
     for &e in cloth_edges {
         let (a, b) = (to_body(pos[e[0] as usize]), to_body(pos[e[1] as usize]));
-        if let Some(contact) = edges.deepest(a, b, params.thickness, inside) {
-            collide_edge(params, step, pos, vel, e, &contact);
+        if let Some(contact) = edges.deepest(a, b, body.thickness, inside) {
+            collide_edge(body, pose, pos, vel, e, &contact);
         }
     }
 }

@@ -26,7 +26,9 @@ mod vbd_solve;
 mod wind_forces;
 
 pub use bending_forces::bending_forces;
-pub use collide_body::{collide_body, collide_edge, collide_edges, collide_particle};
+pub use collide_body::{
+    collide_body, collide_edge, collide_edges, collide_particle, to_body_frame,
+};
 pub use hash_clear::hash_clear;
 pub use hash_count::{hash_bucket, hash_cell_of, hash_count};
 pub use hash_fill::hash_fill;
@@ -44,7 +46,7 @@ pub use vbd_solve::{newton_step, solve3, vbd_solve, vertex_system, VbdElements};
 pub use wind_forces::wind_forces;
 
 use crate::error::Error;
-use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep};
+use crate::model::layout::{BodyParams, Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep};
 use crate::model::{ClothModel, Csr};
 use crate::plan::{HingeEvaluation, Pass, PassPlan};
 use crate::solver::{relative_residual, AdapterReport, ParticleState, SolveProgress, Solver};
@@ -67,7 +69,8 @@ pub struct CpuSolver {
     vertex_hinges: Option<(Vec<Hinge>, Csr<u32>)>,
     triangles: Option<(Vec<[u32; 4]>, Csr<u32>)>,
     seams: Option<(Vec<Seam>, Csr<u32>)>,
-    collider: Option<std::sync::Arc<crate::body::Collider>>,
+    /// The collision bodies, when the plan collides (empty otherwise).
+    colliders: Vec<std::sync::Arc<crate::body::Collider>>,
     /// The spatial hash of self-collision (public for per-stage parity tests).
     pub hash: Option<SpatialHash>,
     /// Self-collision by point–triangle impulses (the CPU-only reference) instead of the
@@ -160,9 +163,10 @@ impl CpuSolver {
                 .contains(Pass::SeamForces)
                 .then(|| (model.seams.clone(), model.seam_csr())),
             point_triangle_reference: false,
-            cloth_edges: match &model.collider {
-                Some(c) if c.edges.is_some() => model.springs.iter().map(|s| s.ends).collect(),
-                _ => Vec::new(),
+            cloth_edges: if model.colliders.iter().any(|c| c.edges.is_some()) {
+                model.springs.iter().map(|s| s.ends).collect()
+            } else {
+                Vec::new()
             },
             self_triangles: if plan.contains(Pass::SelfCollide) {
                 model.triangles.clone()
@@ -181,10 +185,11 @@ impl CpuSolver {
                     vel_out: vec![Vec4::ZERO; n],
                 }
             }),
-            collider: if plan.contains(Pass::CollideBody) {
-                model.collider.clone()
+            // The implicit solve takes contact only where the plan collides, as on the GPU.
+            colliders: if plan.contains(Pass::CollideBody) {
+                model.colliders.clone()
             } else {
-                None
+                Vec::new()
             },
             monitor_springs: model.spring_csr(),
             strain: plan
@@ -331,13 +336,7 @@ impl CpuSolver {
                 std::mem::swap(&mut self.pos, &mut h.pos_out);
                 std::mem::swap(&mut self.vel, &mut h.vel_out);
             }
-            Pass::CollideBody => {
-                let c = self
-                    .collider
-                    .as_ref()
-                    .expect("collide_body is not in the plan");
-                self.collide(c.clone(), step);
-            }
+            Pass::CollideBody => self.collide(step),
             Pass::VbdInit => {
                 let v = self.vbd.as_mut().expect("vbd_init is not in the plan");
                 let (x, y, steps) = (&mut v.x, &mut v.y, &mut v.steps);
@@ -345,6 +344,7 @@ impl CpuSolver {
             }
             Pass::VbdSolve => {
                 let v = self.vbd.as_mut().expect("vbd_solve is not in the plan");
+                let sdfs: Vec<&[f32]> = self.colliders.iter().map(|c| &c.sdf.values[..]).collect();
                 let el = VbdElements {
                     springs: (&v.springs.offsets, &v.springs.items),
                     hinges: v
@@ -355,7 +355,7 @@ impl CpuSolver {
                         .seams
                         .as_ref()
                         .map(|(s, c)| (&c.offsets[..], &c.items[..], &s[..])),
-                    sdf: self.collider.as_ref().map(|c| &c.sdf.values[..]),
+                    sdfs: &sdfs,
                 };
                 for sweep in &v.sweeps {
                     let ran = vbd_solve(
@@ -419,39 +419,65 @@ impl CpuSolver {
         self.point_triangle_reference = true;
     }
 
-    /// The collision stage with the body's CPU strategy: the SDF (the GPU's twin) or exact
-    /// queries, all driving the same response.
-    fn collide(&mut self, c: std::sync::Arc<crate::body::Collider>, step: &SubstepParams) {
+    /// The collision stage with each body's CPU strategy: the SDF (the GPU's twin) or exact
+    /// queries, all driving the same response, body after body for each particle as the kernel
+    /// does; then the edge contacts of the bodies that take them.
+    fn collide(&mut self, step: &SubstepParams) {
         use crate::body::Strategy;
         let p = &self.params;
-        match c.strategy {
-            Strategy::Sdf => collide_body(p, step, &mut self.pos, &mut self.vel, &c.sdf.values),
-            _ => {
-                let query = |x: glam::Vec3| {
-                    let (phi, nearest) = c.query(x);
-                    // ∇φ points away from the surface outside and towards it inside.
-                    let d = x - nearest;
-                    let len = d.length();
-                    let grad = if len > 0.0 {
-                        d / len * phi.signum()
-                    } else {
-                        glam::Vec3::ZERO
-                    };
-                    grad.extend(phi)
-                };
-                let n = p.num_particles as usize;
-                let state = (&mut self.pos[..n], &mut self.vel[..n]);
-                state.into_par_iter().for_each(|(pos, vel)| {
-                    let (x, v) = collide_particle(p, step, *pos, vel.truncate(), query);
-                    *pos = x;
-                    *vel = v.extend(0.0);
-                });
+        let colliders = &self.colliders[..(p.num_bodies as usize).min(self.colliders.len())];
+        if colliders.iter().all(|c| c.strategy == Strategy::Sdf) {
+            let sdfs: Vec<&[f32]> = colliders.iter().map(|c| &c.sdf.values[..]).collect();
+            collide_body(p, step, &mut self.pos, &mut self.vel, &sdfs);
+        } else {
+            let n = p.num_particles as usize;
+            let state = (&mut self.pos[..n], &mut self.vel[..n]);
+            state.into_par_iter().for_each(|(pos, vel)| {
+                if pos.w == 0.0 {
+                    return;
+                }
+                let (mut x, mut v) = (pos.truncate(), vel.truncate());
+                for (b, c) in colliders.iter().enumerate() {
+                    let body = &p.bodies[b];
+                    (x, v) = collide_particle(body, &step.bodies[b], x, v, |x| {
+                        strategy_query(body, c, x)
+                    });
+                }
+                *pos = x.extend(pos.w);
+                *vel = v.extend(0.0);
+            });
+        }
+        for (b, c) in colliders.iter().enumerate() {
+            if c.edges.is_some() {
+                let (body, pose) = (&p.bodies[b], &step.bodies[b]);
+                collide_edges(
+                    body,
+                    pose,
+                    &mut self.pos,
+                    &mut self.vel,
+                    &self.cloth_edges,
+                    c,
+                );
             }
         }
-        if c.edges.is_some() {
-            collide_edges(p, step, &mut self.pos, &mut self.vel, &self.cloth_edges, &c);
-        }
     }
+}
+
+/// φ (w) and ∇φ (xyz) at body-frame point `x` by the collider's CPU strategy.
+fn strategy_query(body: &BodyParams, c: &crate::body::Collider, x: glam::Vec3) -> Vec4 {
+    if c.strategy == crate::body::Strategy::Sdf {
+        return collide_body::sample_body_sdf(body, &c.sdf.values, x);
+    }
+    let (phi, nearest) = c.query(x);
+    // ∇φ points away from the surface outside and towards it inside.
+    let d = x - nearest;
+    let len = d.length();
+    let grad = if len > 0.0 {
+        d / len * phi.signum()
+    } else {
+        glam::Vec3::ZERO
+    };
+    grad.extend(phi)
 }
 
 impl Solver for CpuSolver {

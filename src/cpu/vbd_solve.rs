@@ -9,7 +9,7 @@
 use super::collide_body::{body_velocity_at, sample_body_sdf, to_body_frame, to_world};
 use super::hinge_forces::hinge_geometry;
 use super::seam_forces::rest_gap;
-use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep};
+use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep, MAX_BODIES};
 use crate::solver::converged_before;
 use glam::{Mat3, Vec3, Vec4};
 use rayon::prelude::*;
@@ -22,8 +22,8 @@ pub struct VbdElements<'a> {
     pub hinges: Option<(&'a [u32], &'a [u32], &'a [Hinge])>,
     /// Seam offsets, seam refs (index · 4 + role) and seam pairs, when the cloth is sewn.
     pub seams: Option<(&'a [u32], &'a [u32], &'a [Seam])>,
-    /// The body's SDF values (grid in `SimParams`), when the scene has a body.
-    pub sdf: Option<&'a [f32]>,
+    /// Each body's SDF nodes (grids in `SimParams::bodies`); empty without a body.
+    pub sdfs: &'a [&'a [f32]],
 }
 
 /// Contact is this many times stiffer than the mean diagonal of everything else acting on the
@@ -54,7 +54,7 @@ fn spring_hessian(k: f32, rest: f32, d: Vec3, len: f32) -> Mat3 {
 ///   derivative of sin(θ/2) times the outer product of the angle's direction; PSD);
 /// - seam pairs: zero-rest (or shrinking-rest, pull-only) springs to the partner point, the
 ///   partner's ends taking −(1 − w) and −w of the force and (1 − w)² and w² of the Hessian;
-/// - body contact, at the body's pose at the end of the step: a penalty ½k_c(thickness − φ)²
+/// - contact with each body, at its pose at the end of the step: a penalty ½k_c(thickness − φ)²
 ///   where φ < thickness, Hessian k_c·n̂n̂ᵀ, k_c = `CONTACT_RATIO` × the mean diagonal of the
 ///   rest; and Coulomb friction lagged on the penalty's normal force λ = k_c(thickness − φ):
 ///   −μλ·u/max(|u|, ε_v·h) on the slip u (the tangential displacement over the
@@ -69,7 +69,7 @@ pub fn vertex_system(
     prev: &[Vec4],
     y: &[Vec4],
     el: &VbdElements,
-) -> (Vec3, Mat3, Option<(f32, Vec3)>) {
+) -> (Vec3, Mat3, Surfaces) {
     let h = params.dt;
     let inv_mass = prev[i].w;
     let mass = 1.0 / inv_mass;
@@ -140,54 +140,60 @@ pub fn vertex_system(
         }
     }
 
-    let mut surface = None;
-    if let Some(sdf) = el.sdf {
-        let (xb, d) = to_body_frame(step, xi);
-        let s = sample_body_sdf(params, sdf, xb);
-        let g = to_world(step, s.truncate());
+    // Every body's contact stiffness comes from the same (contact-free) diagonal.
+    let k_c = CONTACT_RATIO * (hess.x_axis.x + hess.y_axis.y + hess.z_axis.z) / 3.0;
+    let mut surfaces = Surfaces::default();
+    for (b, sdf) in el.sdfs.iter().enumerate().take(params.num_bodies as usize) {
+        let (body, pose) = (&params.bodies[b], &step.bodies[b]);
+        let (xb, d) = to_body_frame(pose, xi);
+        let s = sample_body_sdf(body, sdf, xb);
+        let g = to_world(pose, s.truncate());
         let len = g.length();
         let n = if len > 1e-12 { g / len } else { Vec3::ZERO };
-        surface = Some((s.w, n));
-        if s.w < params.thickness {
-            let k_c = CONTACT_RATIO * (hess.x_axis.x + hess.y_axis.y + hess.z_axis.z) / 3.0;
-            let lambda = k_c * (params.thickness - s.w);
+        surfaces[b] = Some((s.w, n));
+        if s.w < body.thickness {
+            let lambda = k_c * (body.thickness - s.w);
             f += lambda * n;
             hess += k_c * outer(n, n);
-            let v_body = body_velocity_at(step, d);
+            let v_body = body_velocity_at(pose, d);
             let slip = moved(i) - h * v_body;
             let u = slip - slip.dot(n) * n;
-            let scale = params.friction * lambda / u.length().max(params.friction_slip_speed * h);
+            let scale = body.friction * lambda / u.length().max(body.friction_slip_speed * h);
             f -= scale * u;
             hess += scale * (Mat3::IDENTITY - outer(n, n));
         }
     }
-    (f, hess, surface)
+    (f, hess, surfaces)
 }
+
+/// Each body's signed distance φ and outward normal at a vertex (`None` past the scene's bodies).
+pub type Surfaces = [Option<(f32, Vec3)>; MAX_BODIES];
 
 /// How far inside the contact layer, as a fraction of the thickness, a vertex that reaches it
 /// from outside stops (`newton_step`).
 pub const CONTACT_ENTRY: f32 = 1e-2;
 
-/// The vertex's Newton step H⁻¹f, stopped where it would enter the body's contact layer from
-/// outside: at `CONTACT_ENTRY` of the thickness inside it (φ linearised along the step).
+/// The vertex's Newton step H⁻¹f, stopped where it would enter a body's contact layer from
+/// outside: at `CONTACT_ENTRY` of the thickness inside it (φ linearised along the step), body
+/// by body in scene order.
 /// Outside the layer the contact has no force and no stiffness, so an unstopped step lands as
 /// deep as the pull takes it (millimetres); the next sweep's stiff penalty throws it back out,
 /// and a resting vertex alternated between the two on every sweep (the largest step of every
 /// sweep stayed at ~2 mm). Stopped just inside, the next sweep sees the contact and settles it.
-pub fn newton_step(params: &SimParams, f: Vec3, hess: Mat3, surface: Option<(f32, Vec3)>) -> Vec3 {
-    let delta = solve3(hess, f);
-    match surface {
-        Some((phi, n)) if phi >= params.thickness => {
-            let entry = params.thickness * (1.0 - CONTACT_ENTRY);
-            let landing = phi + n.dot(delta);
-            if landing < entry {
-                delta + (entry - landing) * n
-            } else {
-                delta
+pub fn newton_step(params: &SimParams, f: Vec3, hess: Mat3, surfaces: &Surfaces) -> Vec3 {
+    let mut delta = solve3(hess, f);
+    for (body, surface) in params.bodies.iter().zip(surfaces) {
+        if let Some((phi, n)) = *surface {
+            if phi >= body.thickness {
+                let entry = body.thickness * (1.0 - CONTACT_ENTRY);
+                let landing = phi + n.dot(delta);
+                if landing < entry {
+                    delta += (entry - landing) * n;
+                }
             }
         }
-        _ => delta,
     }
+    delta
 }
 
 /// H⁻¹f through the adjugate (as the kernel, which has no matrix inverse); zero when H is
@@ -237,8 +243,8 @@ pub fn vbd_solve(
             if prev[i].w == 0.0 {
                 return None;
             }
-            let (f, hess, surface) = vertex_system(params, step, i, x_now, prev, y, el);
-            let delta = newton_step(params, f, hess, surface);
+            let (f, hess, surfaces) = vertex_system(params, step, i, x_now, prev, y, el);
+            let delta = newton_step(params, f, hess, &surfaces);
             let next = (x_now[i].truncate() + delta).extend(prev[i].w);
             Some((i, next, delta.length()))
         })

@@ -1,6 +1,6 @@
 //! The animated glTF binary (`.glb`): the cloth's first written frame as the base mesh, one
 //! morph target per later frame (position and normal deltas), a weights animation that moves
-//! through them, and the body as a second node, posed or moved rigidly by its own channels.
+//! through them, and each body as a further node, posed or moved rigidly by its own channels.
 
 use super::obj::unit_normals;
 use crate::preview::{BODY, FABRIC};
@@ -24,10 +24,12 @@ pub struct ClothTrack<'a> {
     pub frames: &'a [Vec<Vec3>],
 }
 
-/// The body: its mesh in its own frame and its rigid pose at each of the cloth's times (one
-/// pose when it never moves).
+/// A body: its mesh in its own frame and its rigid pose at each of the cloth's times (one pose
+/// when it never moves).
 #[derive(Clone, Debug)]
 pub struct BodyTrack<'a> {
+    /// The node's name (`body`, or `body0`, `body1`, … among several).
+    pub name: String,
     /// Positions in the body frame, m.
     pub positions: &'a [Vec3],
     /// Triangles.
@@ -38,7 +40,7 @@ pub struct BodyTrack<'a> {
 
 /// The `.glb` bytes, or `None` without frames, with frames of unequal length or times that do
 /// not match them, or past the format's 4 GiB.
-pub fn glb_bytes(cloth: &ClothTrack, body: Option<&BodyTrack>) -> Option<Vec<u8>> {
+pub fn glb_bytes(cloth: &ClothTrack, bodies: &[BodyTrack]) -> Option<Vec<u8>> {
     let base = cloth.frames.first()?;
     let n = base.len();
     if cloth.times.len() != cloth.frames.len() || cloth.frames.iter().any(|f| f.len() != n) {
@@ -68,12 +70,12 @@ pub fn glb_bytes(cloth: &ClothTrack, body: Option<&BodyTrack>) -> Option<Vec<u8>
         let output = b.scalars(&weights, false);
         channels.push(b.channel(&mut samplers, input, output, nodes[0], Weights));
     }
-    if let Some(body) = body {
+    for body in bodies {
         let (rotation, translation) = *body.poses.first()?;
         let mesh = b.body_mesh(body);
         let node = b.root.push(json::Node {
             mesh: Some(mesh),
-            name: Some("body".into()),
+            name: Some(body.name.clone()),
             rotation: Some(json::scene::UnitQuaternion(rotation.to_array())),
             translation: Some(translation.to_array()),
             ..node()
@@ -200,7 +202,7 @@ impl Builder {
         let material = self.material("body", BODY.extend(1.0), false);
         let indices = self.indices(body.triangles);
         self.root.push(json::Mesh {
-            name: Some("body".into()),
+            name: Some(body.name.clone()),
             primitives: vec![primitive(attributes, indices, material, Vec::new())],
             weights: None,
             extensions: None,

@@ -30,7 +30,7 @@ pub struct Exporter<'a> {
     triangles: &'a [[u32; 3]],
     uv: Option<&'a [Vec2]>,
     groups: Vec<Group>,
-    body: Option<&'a Collider>,
+    bodies: &'a [std::sync::Arc<Collider>],
     /// The written frames' numbers and positions, kept for the PC2 and glTF files.
     kept_frames: Vec<u32>,
     kept: Vec<Vec<Vec3>>,
@@ -55,7 +55,7 @@ impl<'a> Exporter<'a> {
             triangles,
             uv: prep.garment.as_ref().map(|g| &g.uv[..]),
             groups,
-            body: prep.model.collider.as_deref(),
+            bodies: &prep.model.colliders,
             kept_frames: Vec::new(),
             kept: Vec::new(),
             written: 0,
@@ -81,11 +81,12 @@ impl<'a> Exporter<'a> {
             let text = obj::cloth_obj(&positions, self.triangles, self.uv, &self.groups);
             self.write(&name, text.as_bytes())?;
             names.push(name);
-            if let Some(c) = self.body {
+            for (i, c) in self.bodies.iter().enumerate() {
+                let stem = self.body_name(i);
                 let name = if c.motion.moves() {
-                    Some(format!("body_{frame:04}.obj"))
+                    Some(format!("{stem}_{frame:04}.obj"))
                 } else {
-                    (self.written == 0).then(|| "body.obj".to_string())
+                    (self.written == 0).then(|| format!("{stem}.obj"))
                 };
                 if let Some(name) = name {
                     let world = self.body_world(c, frame);
@@ -138,22 +139,24 @@ impl<'a> Exporter<'a> {
                 times: &times,
                 frames: &self.kept,
             };
-            let body = self.body.map(|c| glb::BodyTrack {
-                positions: &c.body.mesh.positions,
-                triangles: &c.body.mesh.triangles,
-                poses: if c.motion.moves() {
-                    let pose = |t: f32| c.motion.at(t);
-                    times
-                        .iter()
-                        .map(|&t| (pose(t).rotation, pose(t).translation))
-                        .collect()
-                } else {
-                    let still = c.motion.at(0.0);
-                    vec![(still.rotation, still.translation)]
-                },
-            });
-            let bytes =
-                glb::glb_bytes(&cloth, body.as_ref()).ok_or_else(|| self.too_large(GLB_FILE))?;
+            let bodies: Vec<glb::BodyTrack> = (self.bodies.iter().enumerate())
+                .map(|(i, c)| glb::BodyTrack {
+                    name: self.body_name(i),
+                    positions: &c.body.mesh.positions,
+                    triangles: &c.body.mesh.triangles,
+                    poses: if c.motion.moves() {
+                        let pose = |t: f32| c.motion.at(t);
+                        times
+                            .iter()
+                            .map(|&t| (pose(t).rotation, pose(t).translation))
+                            .collect()
+                    } else {
+                        let still = c.motion.at(0.0);
+                        vec![(still.rotation, still.translation)]
+                    },
+                })
+                .collect();
+            let bytes = glb::glb_bytes(&cloth, &bodies).ok_or_else(|| self.too_large(GLB_FILE))?;
             self.write(GLB_FILE, &bytes)?;
             names.push(GLB_FILE.to_string());
         }
@@ -171,6 +174,15 @@ impl<'a> Exporter<'a> {
         self.kept_frames = kept_frames;
         self.kept = kept;
         self.written = written;
+    }
+
+    /// Body `i`'s file and node name: `body`, or `body0`, `body1`, … among several.
+    fn body_name(&self, i: usize) -> String {
+        if self.bodies.len() == 1 {
+            "body".into()
+        } else {
+            format!("body{i}")
+        }
     }
 
     /// The body's vertices in world coordinates at `frame`'s time.

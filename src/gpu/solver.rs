@@ -789,8 +789,11 @@ fn element_arrays(
             ]
         }
         Elements::Sdf => {
-            let c = model.collider.as_ref().expect("contact needs a body");
-            vec![("sdf", R32Float, bytes(bytemuck::cast_slice(&c.sdf.values)))]
+            // Every body's nodes one after another, as `BodyParams::sdf_dims.w` counts them.
+            let nodes: Vec<f32> = (model.colliders.iter())
+                .flat_map(|c| c.sdf.values.iter().copied())
+                .collect();
+            vec![("sdf", R32Float, bytes(bytemuck::cast_slice(&nodes)))]
         }
     }
 }

@@ -172,9 +172,9 @@ impl Scene {
         };
         let pinned: Vec<u32> = scene_pins.iter().chain(&attached).copied().collect();
         let mut model = ClothModel::from_mesh(&mesh, &self.fabric, &pinned);
-        if let Some(b) = &self.body {
-            let c = self.checker();
-            model.collider = Some(std::sync::Arc::new(build_collider(b, &c)?));
+        for (i, b) in self.bodies.iter().enumerate() {
+            let collider = build_collider(b, &self.checker(), &self.body_table(i))?;
+            model.colliders.push(std::sync::Arc::new(collider));
         }
         if let (
             Some(g),

@@ -15,14 +15,14 @@ use std::path::PathBuf;
 /// 0.5% of the radius (cos(π/48) ≈ 0.9979).
 const SHAPE_RINGS: u32 = 48;
 
-/// The body's triangles, checked.
-pub fn build_body(settings: &BodySettings, c: &Checker) -> Result<Body, InputError> {
+/// The body's triangles, checked (`table` names it in errors).
+pub fn build_body(settings: &BodySettings, c: &Checker, table: &str) -> Result<Body, InputError> {
     let mesh = match &settings.source {
         BodySource::Mesh {
             path,
             scale,
             offset,
-        } => return Body::load(path, *scale, *offset, "body.path"),
+        } => return Body::load(path, *scale, *offset, &format!("{table}.path")),
         BodySource::Sphere { center, radius } => shapes::sphere(*center, *radius, SHAPE_RINGS),
         BodySource::Cuboid { center, half } => shapes::cuboid(*center, *half),
         BodySource::Mannequin { feet } => shapes::mannequin(*feet),
@@ -34,7 +34,7 @@ pub fn build_body(settings: &BodySettings, c: &Checker) -> Result<Body, InputErr
     };
     Body::from_mesh(mesh).map_err(|e| {
         c.err(
-            "body",
+            table,
             "shape",
             format!("generated an invalid mesh: {e}"),
             "report this as a bug",
@@ -42,9 +42,14 @@ pub fn build_body(settings: &BodySettings, c: &Checker) -> Result<Body, InputErr
     })
 }
 
-/// Loads the body, bakes (or reads) its SDF under the memory cap, and builds the collider.
-pub(crate) fn build_collider(settings: &BodySettings, c: &Checker) -> Result<Collider, InputError> {
-    let body = build_body(settings, c)?;
+/// Loads the body (table `table` of the scene), bakes (or reads) its SDF under the memory cap,
+/// and builds the collider.
+pub(crate) fn build_collider(
+    settings: &BodySettings,
+    c: &Checker,
+    table: &str,
+) -> Result<Collider, InputError> {
+    let body = build_body(settings, c, table)?;
     let (_, dims) = grid_for(&body, settings.sdf_resolution, settings.sdf_margin);
     let bytes = grid_bytes(dims);
     if bytes > settings.sdf_max_bytes {
@@ -52,7 +57,7 @@ pub(crate) fn build_collider(settings: &BodySettings, c: &Checker) -> Result<Col
         let suggested =
             settings.sdf_resolution * (bytes as f32 / settings.sdf_max_bytes as f32).cbrt() * 1.05;
         return Err(c.err(
-            "body",
+            table,
             "sdf_resolution_m",
             format!(
                 "an SDF at {} m needs {dims:?} nodes = {:.0} MiB, above sdf_max_mb = {:.0}",
@@ -72,7 +77,7 @@ pub(crate) fn build_collider(settings: &BodySettings, c: &Checker) -> Result<Col
     )
     .map_err(|e| {
         c.err(
-            "body",
+            table,
             "",
             format!("cannot bake the SDF: {e}"),
             "check the body mesh",
@@ -80,7 +85,7 @@ pub(crate) fn build_collider(settings: &BodySettings, c: &Checker) -> Result<Col
     })?;
     let exact = ExactBody::new(&body.mesh).map_err(|e| {
         c.err(
-            "body",
+            table,
             "",
             format!("cannot build the BVH: {e}"),
             "check the body mesh",

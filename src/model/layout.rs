@@ -25,18 +25,6 @@ pub struct SimParams {
     pub sewing_rate: f32,
     /// Vertex Block Descent sweeps per substep (implicit Euler; unused otherwise).
     pub iterations: u32,
-    /// Body-frame position of SDF node (0, 0, 0) in m (xyz); w: node spacing in m.
-    pub sdf_origin: [f32; 4],
-    /// SDF nodes along x, y, z; w unused.
-    pub sdf_dims: [u32; 4],
-    /// Collision thickness in m.
-    pub thickness: f32,
-    /// Coulomb friction coefficient against the body.
-    pub friction: f32,
-    /// Fraction of outward normal relative speed lost in contact.
-    pub normal_loss: f32,
-    /// Fraction of tangential relative speed lost in contact.
-    pub tangential_loss: f32,
     /// Self-collision distance in m.
     pub self_thickness: f32,
     /// Spatial hash cell size in m.
@@ -47,17 +35,66 @@ pub struct SimParams {
     pub strain_limit: f32,
     /// Jacobi iterations of `strain_limit` per substep (0 when the stage is off).
     pub strain_iterations: u32,
-    /// Implicit Euler's friction: slip speed relative to the body below which friction grows in
-    /// proportion to the slip (static friction, smoothed), in m/s.
-    pub friction_slip_speed: f32,
     /// Implicit Euler stops sweeping once an iteration's largest Newton step falls below this
     /// fraction of the first iteration's (or below `VBD_STEP_FLOOR`); 0: always `iterations`.
     pub tolerance: f32,
-    /// Padding.
-    pub _pad5: u32,
+    /// Bodies in `bodies` (the rest are zero).
+    pub num_bodies: u32,
+    /// Padding to the array's 16-byte alignment.
+    pub _pad0: u32,
+    /// Each collision body's SDF and contact response.
+    pub bodies: [BodyParams; MAX_BODIES],
 }
 
-/// Per-substep values (WGSL `SubstepParams`), one per substep at a 256-byte stride.
+/// Most collision bodies a scene may have, as `MAX_BODIES` in common.wgsl.
+pub use crate::scene::MAX_BODIES;
+
+/// One collision body's SDF and contact response (WGSL `BodyParams`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BodyParams {
+    /// Body-frame position of SDF node (0, 0, 0) in m (xyz); w: node spacing in m.
+    pub sdf_origin: [f32; 4],
+    /// SDF nodes along x, y, z; w: the body's first node in the shared SDF texture.
+    pub sdf_dims: [u32; 4],
+    /// Collision thickness in m.
+    pub thickness: f32,
+    /// Coulomb friction coefficient against the body.
+    pub friction: f32,
+    /// Fraction of outward normal relative speed lost in contact.
+    pub normal_loss: f32,
+    /// Fraction of tangential relative speed lost in contact.
+    pub tangential_loss: f32,
+    /// Implicit Euler's friction: slip speed relative to the body below which friction grows in
+    /// proportion to the slip (static friction, smoothed), in m/s.
+    pub friction_slip_speed: f32,
+    /// Padding.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+    /// Padding.
+    pub _pad2: u32,
+}
+
+/// One collision body's pose and velocity at the end of a substep (WGSL `BodyPose`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BodyPose {
+    /// Body rotation (body to world), first column; w unused.
+    pub x: [f32; 4],
+    /// Second column.
+    pub y: [f32; 4],
+    /// Third column.
+    pub z: [f32; 4],
+    /// Body translation in m.
+    pub translation: [f32; 4],
+    /// Velocity of the body frame's origin in m/s.
+    pub velocity: [f32; 4],
+    /// Body angular velocity in rad/s (world frame).
+    pub angular_velocity: [f32; 4],
+}
+
+/// Per-substep values (WGSL `SubstepParams`), one per substep at a stride of the adapter's uniform offset alignment.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct SubstepParams {
@@ -71,18 +108,8 @@ pub struct SubstepParams {
     pub _pad0: u32,
     /// Padding.
     pub _pad1: u32,
-    /// Body rotation (body to world), first column; w unused.
-    pub body_x: [f32; 4],
-    /// Second column.
-    pub body_y: [f32; 4],
-    /// Third column.
-    pub body_z: [f32; 4],
-    /// Body translation in m.
-    pub body_translation: [f32; 4],
-    /// Velocity of the body frame's origin in m/s.
-    pub body_velocity: [f32; 4],
-    /// Body angular velocity in rad/s (world frame).
-    pub body_angular_velocity: [f32; 4],
+    /// Each body's pose at the end of the substep, where collision is resolved.
+    pub bodies: [BodyPose; MAX_BODIES],
 }
 
 /// One spring seen from one of its ends (WGSL `SpringRef`).

@@ -49,8 +49,8 @@ pub struct ClothModel {
     pub hinges: Vec<Hinge>,
     /// Seam pairs (empty unless the cloth comes from a sewing pattern).
     pub seams: Vec<Seam>,
-    /// The collision body, if the scene has one.
-    pub collider: Option<std::sync::Arc<crate::body::Collider>>,
+    /// The collision bodies, in scene order.
+    pub colliders: Vec<std::sync::Arc<crate::body::Collider>>,
 }
 
 /// A compressed-sparse-row incidence list: `items[offsets[i]..offsets[i + 1]]` belong to particle i.
@@ -156,7 +156,7 @@ impl ClothModel {
             springs,
             hinges,
             seams: Vec::new(),
-            collider: None,
+            colliders: Vec::new(),
         }
     }
 

@@ -1,5 +1,5 @@
 //! Rendering the frames of a run folder: reads `frame_NNNN.obj`, colours the cloth by mode, adds
-//! the body at its pose, the seams and the legend. One device and one body for many frames.
+//! the bodies at their poses, the seams and the legend. One device and one set of bodies for many frames.
 
 use super::camera::CameraChoice;
 use super::colors::{
@@ -58,14 +58,14 @@ pub struct Previewer<'a> {
     run: PathBuf,
     scene: Option<&'a Scene>,
     fps: f32,
-    body: Option<(Body, &'a BodySettings)>,
-    exact: Option<ExactBody>,
+    bodies: Vec<(Body, &'a BodySettings)>,
+    exact: Option<Vec<ExactBody>>,
     rest: Option<Vec<Vec3>>,
     seams: Option<Vec<[u32; 2]>>,
 }
 
 impl<'a> Previewer<'a> {
-    /// A previewer of the frames in `run`, with `scene`'s body (if any) posed at each frame's
+    /// A previewer of the frames in `run`, with `scene`'s bodies (if any) posed at each frame's
     /// time (`fps` frames per second), rendering on `adapter`.
     pub fn new(
         run: &Path,
@@ -73,16 +73,21 @@ impl<'a> Previewer<'a> {
         fps: f32,
         adapter: &AdapterChoice,
     ) -> Result<Self, Error> {
-        let body = match scene.and_then(|s| s.body.as_ref().map(|b| (s, b))) {
-            Some((s, settings)) => Some((build_body(settings, &s.checker())?, settings)),
-            None => None,
-        };
+        let mut bodies = Vec::new();
+        if let Some(s) = scene {
+            for (i, settings) in s.bodies.iter().enumerate() {
+                bodies.push((
+                    build_body(settings, &s.checker(), &s.body_table(i))?,
+                    settings,
+                ));
+            }
+        }
         Ok(Previewer {
             ctx: GpuContext::new(adapter)?,
             run: run.to_path_buf(),
             scene,
             fps,
-            body,
+            bodies,
             exact: None,
             rest: None,
             seams: None,
@@ -184,25 +189,39 @@ impl<'a> Previewer<'a> {
                 Ok((m, Some(strain_legend(max))))
             }
             ColorMode::Penetration => {
-                let Some((body, settings)) = &self.body else {
+                if self.bodies.is_empty() {
                     return Err(bad(
                         &self.run,
                         "penetration colours need a body, and the run's scene has no [body]",
                         "use --mode fabric or --mode strain",
                     ));
-                };
+                }
                 if self.exact.is_none() {
-                    let exact = ExactBody::new(&body.mesh).map_err(|e| {
-                        Error::Gpu(format!("cannot measure distances to the body: {e}"))
-                    })?;
+                    let exact = (self.bodies.iter())
+                        .map(|(body, _)| ExactBody::new(&body.mesh))
+                        .collect::<Result<Vec<_>, _>>()
+                        .map_err(|e| {
+                            Error::Gpu(format!("cannot measure distances to the body: {e}"))
+                        })?;
                     self.exact = Some(exact);
                 }
                 let exact = self.exact.as_ref().expect("built above");
-                let pose = settings.motion.at(f.number as f32 / self.fps);
-                let inverse = pose.rotation.inverse();
-                let scale = PenetrationScale::for_thickness(settings.thickness);
+                let t = f.number as f32 / self.fps;
+                let poses: Vec<_> = (self.bodies.iter()).map(|(_, s)| s.motion.at(t)).collect();
+                // The thinnest body sets the scale; a particle's distance is to the nearest body.
+                let thickness = (self.bodies.iter())
+                    .map(|(_, s)| s.thickness)
+                    .fold(f32::INFINITY, f32::min);
+                let scale = PenetrationScale::for_thickness(thickness);
                 let colors = (f.positions.iter())
-                    .map(|p| scale.color(exact.query(inverse * (*p - pose.translation)).0))
+                    .map(|p| {
+                        let phi = (exact.iter().zip(&poses))
+                            .map(|(e, pose)| {
+                                e.query(pose.rotation.inverse() * (*p - pose.translation)).0
+                            })
+                            .fold(f32::INFINITY, f32::min);
+                        scale.color(phi)
+                    })
                     .collect();
                 Ok((mesh(colors), Some(penetration_legend(scale))))
             }
@@ -221,19 +240,18 @@ impl<'a> Previewer<'a> {
         Ok(self.seams.as_deref().unwrap_or_default())
     }
 
-    /// The box a preset camera frames: the cloth, and the body where it lies near the cloth's
-    /// box (a T-shirt's head, a skirt's hips, not the whole mannequin).
+    /// The box a preset camera frames: the cloth, and the bodies where they lie near the
+    /// cloth's box (a T-shirt's head, a skirt's hips, not the whole mannequin).
     pub fn framing_box(&self, frame: u32, cloth: &[Vec3]) -> (Vec3, Vec3) {
         let (lo, hi) = bounds(cloth);
-        let Some((body, settings)) = &self.body else {
-            return (lo, hi);
-        };
         // Up by 40% of the cloth's height (a T-shirt's head), elsewhere by 10% of its size.
         let side = Vec3::splat(0.1 * (hi - lo).max_element());
         let (near_lo, near_hi) = (lo - side, hi + side + Vec3::Y * 0.4 * (hi.y - lo.y));
-        let pose = settings.motion.at(frame as f32 / self.fps);
-        let near: Vec<Vec3> = (body.mesh.positions.iter())
-            .map(|p| pose.rotation * *p + pose.translation)
+        let near: Vec<Vec3> = (self.bodies.iter())
+            .flat_map(|(body, settings)| {
+                let pose = settings.motion.at(frame as f32 / self.fps);
+                (body.mesh.positions.iter()).map(move |p| pose.rotation * *p + pose.translation)
+            })
             .filter(|p| p.cmpge(near_lo).all() && p.cmple(near_hi).all())
             .collect();
         if near.is_empty() {
@@ -263,7 +281,7 @@ impl<'a> Previewer<'a> {
             let width_px = (h as f32 / 400.0).max(2.0);
             meshes.push(seam_ribbons(positions, &segments, &camera, h, width_px));
         }
-        if let Some((body, settings)) = &self.body {
+        for (body, settings) in &self.bodies {
             let pose = settings.motion.at(frame as f32 / self.fps);
             meshes.push(DrawMesh {
                 positions: (body.mesh.positions.iter())

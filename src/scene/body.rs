@@ -1,4 +1,4 @@
-//! The `[body]` table: which body, its SDF, its collision response and its motion.
+//! The `[body]` table (or `[[body]]` tables, one per body): which body, its SDF, its collision response and its motion.
 
 use crate::body::motion::{Keyframe, Motion};
 use crate::body::Strategy;
@@ -168,9 +168,78 @@ pub struct BodySettings {
     pub motion: Motion,
 }
 
-/// Validates `[body]`.
-pub(super) fn parse(c: &Checker, base: &Path, b: &RawBody) -> Result<BodySettings, InputError> {
-    let t = "body";
+/// Most collision bodies a scene may have (`MAX_BODIES` in common.wgsl): each body's pose
+/// travels in every substep's uniform.
+pub const MAX_BODIES: usize = 4;
+
+/// `[body]` (one body) or `[[body]]` (several), as the file gives them: the bodies in order.
+pub(super) struct RawBodies(Vec<RawBody>);
+
+/// Either form, keeping serde's message (and line) for a bad key inside a body: an untagged enum
+/// would replace it with "did not match any variant".
+impl<'de> Deserialize<'de> for RawBodies {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = RawBodies;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a [body] table or [[body]] tables")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<RawBodies, A::Error> {
+                RawBody::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+                    .map(|b| RawBodies(vec![b]))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                seq: A,
+            ) -> Result<RawBodies, A::Error> {
+                Vec::<RawBody>::deserialize(serde::de::value::SeqAccessDeserializer::new(seq))
+                    .map(RawBodies)
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
+}
+
+/// How messages name body `i` of `count`: `body` for the only one, `body[i]` among several.
+pub fn body_table(count: usize, i: usize) -> String {
+    if count == 1 {
+        "body".into()
+    } else {
+        format!("body[{i}]")
+    }
+}
+
+/// Validates `[body]` or every `[[body]]`, at most `MAX_BODIES` of them.
+pub(super) fn parse_all(
+    c: &Checker,
+    base: &Path,
+    raw: &Option<RawBodies>,
+) -> Result<Vec<BodySettings>, InputError> {
+    let list = raw.as_ref().map_or(&[][..], |r| &r.0[..]);
+    if list.len() > MAX_BODIES {
+        return Err(c.err(
+            &format!("body[{MAX_BODIES}]"),
+            "",
+            format!(
+                "{} bodies, and a scene may have at most {MAX_BODIES} (each one's pose travels \
+                 with every substep)",
+                list.len()
+            ),
+            "merge bodies that move together into one OBJ mesh (a body may have several \
+             closed pieces)",
+        ));
+    }
+    (list.iter().enumerate())
+        .map(|(i, b)| parse(c, base, b, &body_table(list.len(), i)))
+        .collect()
+}
+
+/// Validates one body table, named `t` in messages.
+fn parse(c: &Checker, base: &Path, b: &RawBody, t: &str) -> Result<BodySettings, InputError> {
     let source = match (&b.path, b.shape.as_deref()) {
         (Some(p), None) => BodySource::Mesh {
             path: base.join(p),
@@ -274,7 +343,7 @@ pub(super) fn parse(c: &Checker, base: &Path, b: &RawBody) -> Result<BodySetting
     let resolution = c.within(t, "sdf_resolution_m", b.sdf_resolution_m, (1e-4, 0.5), "m")?;
     let mut keys = Vec::new();
     for (k, kf) in b.keyframes.iter().enumerate() {
-        let table = format!("body.keyframes[{k}]");
+        let table = format!("{t}.keyframes[{k}]");
         let r = c.vec3(&table, "rotation_deg", kf.rotation_deg)?;
         keys.push(Keyframe {
             time: c.non_negative(&table, "time_s", kf.time_s, "s")?,

@@ -13,7 +13,7 @@ mod self_collision;
 mod solver;
 mod world;
 
-pub use body::{BodySettings, BodySource};
+pub use body::{BodySettings, BodySource, MAX_BODIES};
 pub use cloth::ClothSource;
 pub use fabric::Fabric;
 pub use pins::{Corner, GridEdge, PinSelection};
@@ -73,8 +73,8 @@ pub struct Scene {
     pub wind: Option<Wind>,
     /// Self-collision, if on.
     pub self_collision: Option<SelfCollision>,
-    /// The collision body, if any.
-    pub body: Option<BodySettings>,
+    /// The collision bodies (`[body]`, or `[[body]]` for several), in file order.
+    pub bodies: Vec<BodySettings>,
     /// Solver settings.
     pub solver: SolverSettings,
     /// Output settings.
@@ -132,10 +132,7 @@ impl Scene {
             air_damping: world.air_damping,
             wind,
             self_collision: self_collision::parse(&c, &raw.self_collision)?,
-            body: match &raw.body {
-                Some(b) => Some(body::parse(&c, base, b)?),
-                None => None,
-            },
+            bodies: body::parse_all(&c, base, &raw.body)?,
             solver,
             output,
             preview,
@@ -161,12 +158,17 @@ impl Scene {
         self.checker().err(table, key, problem, fix)
     }
 
+    /// How errors name body `i`: `body` for the only one, `body[i]` among several.
+    pub fn body_table(&self, i: usize) -> String {
+        body::body_table(self.bodies.len(), i)
+    }
+
     /// The effects this scene asks for, for the pass plan.
     pub fn effects(&self) -> Effects {
         Effects {
             bending: self.fabric.bending_stiffness.is_some(),
             wind: self.wind.is_some(),
-            body: self.body.is_some(),
+            body: !self.bodies.is_empty(),
             self_collision: self.self_collision.is_some(),
             implicit: self.solver.integrator == INTEGRATOR_IMPLICIT,
             strain_limit: self.solver.strain_limit.is_some(),

@@ -12,7 +12,7 @@ pub(super) struct RawScene {
     #[serde(default)]
     pub(super) world: RawWorld,
     pub(super) wind: Option<RawWind>,
-    pub(super) body: Option<super::body::RawBody>,
+    pub(super) body: Option<super::body::RawBodies>,
     pub(super) self_collision: Option<RawSelfCollision>,
     pub(super) solver: RawSolver,
     #[serde(default)]

@@ -147,7 +147,7 @@ impl Knobs {
         };
         Knobs {
             spacing,
-            body: scene.body.is_some(),
+            body: !scene.bodies.is_empty(),
         }
     }
 }

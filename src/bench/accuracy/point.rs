@@ -158,9 +158,9 @@ impl Sweep {
         backend: Backend,
         bodies_dir: PathBuf,
     ) -> Result<Sweep, Error> {
-        let body = match &scene.body {
+        let body = match scene.bodies.first() {
             Some(b) => {
-                let body = crate::model::build_body(b, &scene.checker())?;
+                let body = crate::model::build_body(b, &scene.checker(), "body")?;
                 let exact = ExactBody::new(&body.mesh).map_err(|e| {
                     Error::Input(scene.error(
                         "body",
@@ -212,7 +212,7 @@ impl Sweep {
         }
         let mut triangles = 0;
         let mut body_error = 0.0;
-        if let (Some(b), Some((body, _))) = (&mut scene.body, &self.body) {
+        if let (Some(b), Some((body, _))) = (scene.bodies.first_mut(), &self.body) {
             let old = b.sdf_resolution;
             b.sdf_resolution *= s.sdf;
             // An unset margin follows the resolution, as the scene parser sets it.
@@ -253,7 +253,7 @@ impl Sweep {
     /// Seconds a fresh bake of the prepared body's SDF takes: the bake `prepare` just did, or,
     /// when the cache held the grid, one timed here (once per body and resolution).
     fn bake_seconds(&mut self, prep: &Prepared, margin: f32) -> f64 {
-        let Some(c) = &prep.model.collider else {
+        let Some(c) = prep.model.colliders.first() else {
             return f64::NAN;
         };
         let key = (c.body.hash(), c.sdf.cell.to_bits());
@@ -283,7 +283,7 @@ impl Sweep {
             Ok(p) => p,
             Err(e) => return Outcome::failed(e.to_string()),
         };
-        let margin = scene.body.as_ref().map_or(0.0, |b| b.sdf_margin);
+        let margin = scene.bodies.first().map_or(0.0, |b| b.sdf_margin);
         let bake_s = self.bake_seconds(&prep, margin);
         let mut solver: Box<dyn Solver> = match &self.backend {
             Backend::Cpu => {
@@ -325,7 +325,7 @@ impl Sweep {
             None,
             |frame, state, st| {
                 if let Some(exact) = exact {
-                    let body = prep.body_state(frame as f32 * prep.frame_dt);
+                    let body = prep.body_state(0, frame as f32 * prep.frame_dt);
                     let inverse = body.rotation.inverse();
                     for p in &state.positions {
                         let d = exact.query(inverse * (p.truncate() - body.translation)).0;
@@ -356,10 +356,7 @@ impl Sweep {
             substeps: prep.substeps,
             particles: prep.model.len(),
             particle_distance_m: particle_distance(&scene),
-            sdf_resolution_m: scene
-                .body
-                .as_ref()
-                .map_or(f64::NAN, |b| b.sdf_resolution as f64),
+            sdf_resolution_m: (scene.bodies.first()).map_or(f64::NAN, |b| b.sdf_resolution as f64),
             body_triangles,
             body_error_m,
             bake_s,

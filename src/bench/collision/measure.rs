@@ -7,7 +7,7 @@ use crate::body::edges::BodyEdges;
 use crate::body::exact::ExactBody;
 use crate::body::sdf::Sdf;
 use crate::body::{Collider, Strategy};
-use crate::cpu::CpuSolver;
+use crate::cpu::{to_body_frame, CpuSolver};
 use crate::error::Error;
 use crate::gpu::{GpuContext, GpuSolver};
 use crate::model::layout::{SimParams, SubstepParams};
@@ -39,7 +39,7 @@ pub fn build_all(
     settings: &BodySettings,
     contenders: &[Contender],
 ) -> Result<Vec<Built>, Error> {
-    let base = prep.model.collider.as_ref().expect("the scene has a body");
+    let base = prep.model.colliders.first().expect("the scene has a body");
     let failed = |e: String| Error::Unstable(format!("building a collision structure: {e}"));
     // The scene's SDF may have come from the cache: bake it again to time the bake.
     let start = Instant::now();
@@ -123,7 +123,7 @@ pub struct Sample {
 /// body holds still).
 pub fn sample_frames(prep: &Prepared, count: usize) -> Vec<u32> {
     let end = prep.frames as f32 * prep.frame_dt;
-    let motion = &prep.model.collider.as_ref().expect("a body").motion;
+    let motion = &prep.model.colliders.first().expect("a body").motion;
     let (t0, t1) = match (motion.moves(), motion.keys.first(), motion.keys.last()) {
         (true, Some(a), Some(b)) => (a.time.min(end), b.time.min(end)),
         _ => (0.5 * end, end),
@@ -251,13 +251,8 @@ fn deepest(
     pos: &[Vec4],
     edges: &[[u32; 2]],
 ) -> (f32, f32) {
-    let v3 = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
-    let (bx, by, bz) = (v3(step.body_x), v3(step.body_y), v3(step.body_z));
-    let t = v3(step.body_translation);
-    let depth = |x: Vec3| {
-        let d = x - t;
-        (-exact.query(Vec3::new(bx.dot(d), by.dot(d), bz.dot(d))).0).max(0.0)
-    };
+    let pose = &step.bodies[0];
+    let depth = |x: Vec3| (-exact.query(to_body_frame(pose, x).0).0).max(0.0);
     let particles = pos
         .par_iter()
         .map(|p| depth(p.truncate()))
@@ -287,7 +282,7 @@ fn solver(
     batch: usize,
 ) -> Result<Backend, Error> {
     let mut model = prep.model.clone();
-    model.collider = Some(collider.clone());
+    model.colliders = vec![collider.clone()];
     let plan = PassPlan {
         passes,
         hinges: prep.plan.hinges,

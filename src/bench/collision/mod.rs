@@ -211,7 +211,7 @@ fn scaled(scene: &Scene, scale: u32) -> Scene {
     }
     // Every size runs to the same frames, and the warm-up state is the only CPU strategy's.
     s.solver.settle_ke_per_particle = None;
-    if let Some(b) = &mut s.body {
+    if let Some(b) = s.bodies.first_mut() {
         b.strategy = Strategy::Sdf;
         b.edge_contacts = false;
     }
@@ -222,7 +222,7 @@ fn scaled(scene: &Scene, scale: u32) -> Scene {
 pub fn run_cli(opts: &CollisionOptions) -> Result<Vec<CollisionRow>, Error> {
     let contenders = chosen(opts)?;
     let scene = Scene::load(&opts.scene)?;
-    if scene.body.is_none() {
+    if scene.bodies.is_empty() {
         return Err(bad(
             opts,
             "body",
@@ -264,7 +264,7 @@ pub fn run_cli(opts: &CollisionOptions) -> Result<Vec<CollisionRow>, Error> {
         let prep = crate::sim::prepare(&scaled(&scene, scale))?;
         // The body does not change with the cloth: its structures are built once.
         if built.is_none() {
-            let settings = scene.body.as_ref().expect("checked above");
+            let settings = scene.bodies.first().expect("checked above");
             built = Some(measure::build_all(&prep, settings, &contenders)?);
         }
         let built = built.as_ref().expect("built above");

@@ -190,11 +190,11 @@ fn variant(
             return Ok(Some(p));
         }
         (Effect::Body, true) => {
-            if s.body.is_none() {
-                s.body = Some(sphere_under(&base.model.positions));
+            if s.bodies.is_empty() {
+                s.bodies = vec![sphere_under(&base.model.positions)];
             }
         }
-        (Effect::Body, false) => s.body = None,
+        (Effect::Body, false) => s.bodies.clear(),
         (Effect::SelfCollision, true) => {
             s.self_collision = s.self_collision.or(Some(SelfCollision {
                 thickness: None,
@@ -334,7 +334,7 @@ pub fn run_cli(opts: &EffectsOptions) -> Result<Vec<EffectRow>, Error> {
             Effect::Bending => scene.fabric.bending_stiffness.is_some(),
             Effect::Wind => scene.wind.is_some(),
             Effect::Seams => !base.model.seams.is_empty(),
-            Effect::Body => scene.body.is_some(),
+            Effect::Body => !scene.bodies.is_empty(),
             Effect::SelfCollision => scene.self_collision.is_some(),
             Effect::StrainLimit => scene.solver.strain_limit.is_some(),
         };
