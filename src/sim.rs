@@ -247,10 +247,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     let mut substeps = substeps;
     let mut body_surface_speed = 0.0f32;
     for (i, (c, settings)) in model.colliders.iter().zip(&scene.bodies).enumerate() {
-        let radius = (c.body.mesh.positions.iter())
-            .map(|p| p.length())
-            .fold(0.0, f32::max);
-        let speed = c.motion.max_surface_speed(radius);
+        let speed = c.motion.max_surface_speed(&c.body.mesh.positions);
         body_surface_speed = body_surface_speed.max(speed);
         let thickness = settings.thickness;
         let needed = (speed * frame_dt / thickness).ceil() as u32;

@@ -183,8 +183,12 @@ fn turn_right_left_motion() {
         (w - Vec3::new(0.0, -60f32.to_radians(), 0.0)).length() < 1e-4,
         "{w}"
     );
-    // A point 1 m from the axis moves at most 60°/s · 1 m.
-    assert!((m.max_surface_speed(1.0) - 60f32.to_radians()).abs() < 1e-4);
+    // A point 1 m from the axis moves at 60°/s · 1 m; one on the axis, 2 m up, not at all:
+    // the bound is the distance from the axis, not from the origin.
+    let speed = |p: Vec3| m.max_surface_speed(&[p]);
+    assert!((speed(Vec3::new(1.0, 0.0, 0.0)) - 60f32.to_radians()).abs() < 1e-4);
+    assert!(speed(Vec3::new(0.0, 2.0, 0.0)).abs() < 1e-6);
+    assert!((speed(Vec3::new(0.0, 2.0, 1.0)) - 60f32.to_radians()).abs() < 1e-4);
 }
 
 /// The drape_sphere scene, with its cloth lowered 5 cm into the sphere's cap, so that ~150
@@ -428,7 +432,10 @@ fn rotating_skirt_stays_on_and_out_of_the_mannequin() {
     let scene = Scene::load(&fixture("scenes/skirt_rotating.toml")).unwrap();
     let prep = prepare(&scene).unwrap();
     let c = &prep.model.colliders[0];
-    assert!(c.motion.max_surface_speed(1.0) > 1.0, "the body turns");
+    assert!(
+        c.motion.max_surface_speed(&[Vec3::X]) > 1.0,
+        "the body turns"
+    );
     let mut solver: Box<dyn Solver> = match gpu() {
         Some(ctx) => Box::new(
             GpuSolver::new(

@@ -107,14 +107,21 @@ impl Motion {
         hold(self.keys.last().unwrap())
     }
 
-    /// The fastest speed of any point within `radius` of the body origin, over all segments:
-    /// |v| + |ω|·radius (plus the translation's own speed).
-    pub fn max_surface_speed(&self, radius: f32) -> f32 {
+    /// The fastest speed of any of `points` (body frame) over all segments, at most |v| + |ω|·r
+    /// with r a point's distance from the rotation axis through the body origin. Within a
+    /// segment the axis is fixed in the world and the body turns about it, so each point's
+    /// distance from it is that of the segment's midpoint pose (a turning mannequin's head,
+    /// on the axis, does not move; its hands do).
+    pub fn max_surface_speed(&self, points: &[Vec3]) -> f32 {
         self.keys
             .windows(2)
             .map(|w| {
                 let s = self.at(0.5 * (w[0].time + w[1].time));
-                s.linear_velocity.length() + s.angular_velocity.length() * radius
+                let axis = s.angular_velocity.normalize_or_zero();
+                let reach = (points.iter())
+                    .map(|p| axis.cross(s.rotation * *p).length())
+                    .fold(0.0, f32::max);
+                s.linear_velocity.length() + s.angular_velocity.length() * reach
             })
             .fold(0.0, f32::max)
     }
