@@ -7,12 +7,15 @@ use crate::metrics;
 use crate::model::layout::{
     BodyParams, BodyPose, SimParams, SubstepParams, INTEGRATOR_IMPLICIT, MAX_BODIES,
 };
+
+mod bodies;
 use crate::model::BuiltCloth;
 use crate::model::ClothModel;
 use crate::pattern::garment::Garment;
 use crate::plan::PassPlan;
 use crate::scene::{ClothSource, Scene, Wind};
 use crate::solver::{ParticleState, Solver};
+pub use bodies::body_pose;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -243,28 +246,16 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
             ));
         }
     }
-    // Tunnelling: no body surface point may move more than the thickness in one substep.
-    let mut substeps = substeps;
-    let mut body_surface_speed = 0.0f32;
-    for (i, (c, settings)) in model.colliders.iter().zip(&scene.bodies).enumerate() {
-        let speed = c.motion.max_surface_speed(&c.body.mesh.positions);
-        body_surface_speed = body_surface_speed.max(speed);
-        let thickness = settings.thickness;
-        let needed = (speed * frame_dt / thickness).ceil() as u32;
-        if needed > substeps {
-            if auto_substeps {
-                substeps = needed;
-                dt_limited_by = "body speed";
-            } else {
-                warnings.push(format!(
-                    "{}: its surface moves up to {:.2e} m per substep, more than the \
-                     thickness {thickness:.2e} m: particles may tunnel (use substeps = {needed} \
-                     or \"auto\")",
-                    scene.body_table(i),
-                    speed * frame_dt / substeps as f32
-                ));
-            }
-        }
+    let (substeps, body_surface_speed, body_limited) = bodies::body_speed_substeps(
+        &model,
+        scene,
+        frame_dt,
+        substeps,
+        auto_substeps,
+        &mut warnings,
+    );
+    if body_limited {
+        dt_limited_by = "body speed";
     }
     let dt = frame_dt / substeps as f32;
     let colors = implicit.then(|| model.vertex_coloring().colors());
@@ -318,10 +309,11 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         _pad0: 0,
         // Friction is soft while a garment is being sewn; the run switches to each body's
         // slip speed once every seam is closed (see `phase_params`).
-        bodies: body_params(&model, &scene.bodies, garment.is_some()),
+        bodies: bodies::body_params(&model, &scene.bodies, garment.is_some()),
     };
     let sewing = garment.is_some() && body.is_some();
-    let friction_slip_speed_sewn = sewing.then(|| body_params(&model, &scene.bodies, false));
+    let friction_slip_speed_sewn =
+        sewing.then(|| bodies::body_params(&model, &scene.bodies, false));
     let energy_complete =
         model.seams.is_empty() && (model.hinges.is_empty() || !scene.effects().bending);
     Ok(Prepared {
@@ -370,36 +362,6 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     })
 }
 
-/// Each body's SDF grid (its nodes one after another in the SDF texture, in scene order) and
-/// contact response; friction's slip speed is `SEWING_SLIP_SPEED` while `sewing`.
-fn body_params(
-    model: &ClothModel,
-    bodies: &[crate::scene::BodySettings],
-    sewing: bool,
-) -> [BodyParams; MAX_BODIES] {
-    let mut out = [BodyParams::default(); MAX_BODIES];
-    let mut first_node = 0u32;
-    for ((p, c), b) in out.iter_mut().zip(&model.colliders).zip(bodies) {
-        let g = &c.sdf;
-        *p = BodyParams {
-            sdf_origin: g.origin.extend(g.cell).to_array(),
-            sdf_dims: [g.dims[0], g.dims[1], g.dims[2], first_node],
-            thickness: b.thickness,
-            friction: b.friction,
-            normal_loss: b.normal_loss,
-            tangential_loss: b.tangential_loss,
-            friction_slip_speed: if sewing {
-                SEWING_SLIP_SPEED
-            } else {
-                b.friction_slip_speed
-            },
-            ..Default::default()
-        };
-        first_node += g.values.len() as u32;
-    }
-    out
-}
-
 /// The per-substep values of output frame `frame` (1-based): its time and wind.
 pub fn substep_params(prep: &Prepared, frame: u32) -> Vec<SubstepParams> {
     (0..prep.substeps)
@@ -422,19 +384,6 @@ pub fn substep_params(prep: &Prepared, frame: u32) -> Vec<SubstepParams> {
             }
         })
         .collect()
-}
-
-/// A body's pose as the kernels read it.
-pub fn body_pose(body: &BodyState) -> BodyPose {
-    let r = glam::Mat3::from_quat(body.rotation);
-    BodyPose {
-        x: r.x_axis.extend(0.0).to_array(),
-        y: r.y_axis.extend(0.0).to_array(),
-        z: r.z_axis.extend(0.0).to_array(),
-        translation: body.translation.extend(0.0).to_array(),
-        velocity: body.linear_velocity.extend(0.0).to_array(),
-        angular_velocity: body.angular_velocity.extend(0.0).to_array(),
-    }
 }
 
 /// Why a run ended early.
