@@ -496,3 +496,48 @@ fn a_transient_failure_is_retried_then_left_unfinished_for_the_next_run() {
         "{csv}"
     );
 }
+
+/// A closed 10 cm cube as OBJ text, its centre at `y`.
+fn cube_obj(y: f32) -> String {
+    let mut s = String::new();
+    for k in 0..8 {
+        let (x, yy, z) = ((k & 1) as f32, ((k >> 1) & 1) as f32, ((k >> 2) & 1) as f32);
+        s += &format!(
+            "v {} {} {}\n",
+            0.1 * x - 0.05,
+            0.1 * yy - 0.05 + y,
+            0.1 * z - 0.05
+        );
+    }
+    // Outward-facing quads, each as two triangles (1-based).
+    for [a, b, c, d] in [
+        [1, 3, 4, 2],
+        [5, 6, 8, 7],
+        [1, 2, 6, 5],
+        [3, 7, 8, 4],
+        [1, 5, 7, 3],
+        [2, 4, 8, 6],
+    ] {
+        s += &format!("f {a} {b} {c}\nf {a} {c} {d}\n");
+    }
+    s
+}
+
+#[test]
+fn every_body_mesh_is_in_an_items_input_hash() {
+    // Two OBJ bodies: editing the second one must change the item's hash, or a rerun would
+    // keep results made with the old mesh.
+    let dir = workdir("two-bodies");
+    std::fs::write(dir.join("scenes/low.obj"), cube_obj(0.0)).unwrap();
+    std::fs::write(dir.join("scenes/high.obj"), cube_obj(1.0)).unwrap();
+    let scene = std::fs::read_to_string(write_scene(&dir, "sheet.toml", 2)).unwrap();
+    let scene = scene + "\n[[body]]\npath = \"low.obj\"\n\n[[body]]\npath = \"high.obj\"\n";
+    std::fs::write(dir.join("scenes/sheet.toml"), scene).unwrap();
+    let manifest = write_manifest(&dir, 1);
+    let load = || Manifest::load(&manifest).unwrap().items.remove(0);
+    let before = load();
+    let roles: Vec<&str> = before.files.iter().map(|f| f.0.as_str()).collect();
+    assert_eq!(roles, ["body[0]", "body[1]"], "{:?}", before.files);
+    std::fs::write(dir.join("scenes/high.obj"), cube_obj(1.2)).unwrap();
+    assert_ne!(load().inputs_sha256, before.inputs_sha256);
+}

@@ -192,8 +192,15 @@ fn parse_line(
         ClothSource::Mesh { path, .. } => referenced.push(("cloth mesh", path.clone())),
         ClothSource::Grid { .. } => {}
     }
-    if let Some(BodySource::Mesh { path, .. }) = scene.bodies.first().map(|b| &b.source) {
-        referenced.push(("body", path.clone()));
+    // Every body's mesh: an edited second body must change the item's hash too.
+    let bodies: Vec<(String, PathBuf)> = (scene.bodies.iter().enumerate())
+        .filter_map(|(i, b)| match &b.source {
+            BodySource::Mesh { path, .. } => Some((scene.body_table(i), path.clone())),
+            _ => None,
+        })
+        .collect();
+    for (table, path) in &bodies {
+        referenced.push((table.as_str(), path.clone()));
     }
     let mut hasher = Sha256::new();
     let mut eat = |bytes: &[u8]| {
