@@ -201,3 +201,24 @@ fn effects_quick_writes_every_documented_column() {
         assert!(common::finite(row, "resources_with") >= common::finite(row, "resources_without"));
     }
 }
+
+#[test]
+fn accuracy_refuses_a_scene_with_two_bodies() {
+    // The sweep's SDF and simplification knobs and its penetration measure are one body's.
+    let out = common::out_dir("bench-accuracy", "two-bodies");
+    let scene = common::fixture("scenes/cloth_pinched.toml");
+    let r = common::drapekit(&[
+        "bench",
+        "accuracy",
+        scene.to_str().unwrap(),
+        "--quick",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("body[1]") && stderr.contains("fix:"),
+        "{stderr}"
+    );
+}

@@ -170,3 +170,27 @@ fn bad_strategies_and_bodiless_scenes_are_bad_input() {
     );
     assert!(!out.exists(), "bad input wrote {}", out.display());
 }
+
+#[test]
+fn a_scene_with_two_bodies_is_refused_with_the_second_named() {
+    // The bench builds every strategy's collider from one body: a second would be ignored on
+    // the CPU and read past the SDF texture on the GPU.
+    let out = common::out_dir("bench-collision", "two-bodies");
+    let scene = common::fixture("scenes/cloth_pinched.toml");
+    let r = common::drapekit(&[
+        "bench",
+        "collision",
+        "--quick",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("body[1]") && stderr.contains("fix:"),
+        "{stderr}"
+    );
+    assert!(!out.exists(), "wrote {}", out.display());
+}

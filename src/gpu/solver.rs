@@ -95,6 +95,15 @@ impl GpuSolver {
     ) -> Result<Self, Error> {
         let plan = &plan.for_backend(Self::HINGES);
         let n = model.len();
+        // The kernels loop over `num_bodies` bodies and index the SDF texture by their offsets:
+        // more than the model's bodies would read past its nodes.
+        if plan.contains(Pass::CollideBody) && params.num_bodies as usize != model.colliders.len() {
+            return Err(Error::Gpu(format!(
+                "{} bodies in the parameters but {} in the model",
+                params.num_bodies,
+                model.colliders.len()
+            )));
+        }
         let state_usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC;
         let mut labels = vec!["params", "positions", "velocities", "forces", "staging"];
         let params_buf = ctx

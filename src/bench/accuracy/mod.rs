@@ -68,6 +68,18 @@ pub struct Row {
 /// Runs the sweep and writes its files; returns the rows.
 pub fn run_cli(opts: &AccuracyOptions) -> Result<Vec<Row>, Error> {
     let scene = Scene::load(&opts.scene)?;
+    if scene.bodies.len() > 1 {
+        // Its SDF and simplification knobs, and its penetration, are the one body's.
+        return Err(Error::Input(crate::error::InputError::new(
+            &opts.scene,
+            "body[1]",
+            format!(
+                "the scene has {} bodies, and the accuracy sweep varies and measures one",
+                scene.bodies.len()
+            ),
+            "use a scene with a single [body] table, e.g. fixtures/scenes/drape_sphere.toml",
+        )));
+    }
     let frames = opts.frames.unwrap_or(if opts.quick {
         scene.solver.frames.min(QUICK_FRAMES)
     } else {

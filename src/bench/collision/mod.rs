@@ -230,6 +230,17 @@ pub fn run_cli(opts: &CollisionOptions) -> Result<Vec<CollisionRow>, Error> {
             "use a scene with a [body] section, e.g. fixtures/scenes/skirt_collision.toml",
         ));
     }
+    if scene.bodies.len() > 1 {
+        return Err(bad(
+            opts,
+            "body[1]",
+            format!(
+                "the scene has {} bodies, and the bench compares strategies on one",
+                scene.bodies.len()
+            ),
+            "use a scene with a single [body] table, e.g. fixtures/scenes/skirt_collision.toml",
+        ));
+    }
     if matches!(scene.cloth, ClothSource::Mesh { .. }) && opts.scales.iter().any(|&s| s != 1) {
         return Err(bad(
             opts,
