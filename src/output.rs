@@ -86,10 +86,10 @@ pub struct Summary {
     pub seams_closed_frame: Option<u32>,
     /// Collision bodies in the scene.
     pub bodies: usize,
-    /// CPU contact strategy against the (first) body (`null` without a body; the GPU uses the
-    /// SDF).
+    /// CPU contact strategy against the bodies (`null` without a body; the GPU uses the SDF;
+    /// `mixed` where bodies use different ones).
     pub collision_strategy: Option<&'static str>,
-    /// Whether cloth edges were also tested against the (first) body's edges (CPU only).
+    /// Whether cloth edges were also tested against some body's edges (CPU only).
     pub edge_contacts: Option<bool>,
     /// Deepest particle inside any body at any output frame, measured against the exact mesh.
     pub max_penetration_m: Option<f32>,

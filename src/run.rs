@@ -198,8 +198,9 @@ fn run_scene_from(
     }
     let (device, backend_note) = choose_device(opts.backend, &opts.adapter)?;
     if let Some(ctx) = &device {
-        // Refused from the scene alone, before anything is built.
+        // Refused from the scene alone, before anything is built or baked.
         crate::model::budget::check_gpu_textures(&scene, ctx.max_texels())?;
+        crate::model::budget::check_sdf_textures(&scene, ctx.max_texels())?;
     }
     let prep = prepare(&scene)?;
     if let Some(ctx) = &device {
@@ -407,14 +408,20 @@ fn run_scene_from(
         seam_gaps_m: stats.seam_gaps.clone(),
         seams_closed_frame: stats.seams_closed_frame,
         bodies: prep.model.colliders.len(),
-        collision_strategy: first_body.map(|c| {
+        collision_strategy: first_body.map(|first| {
+            let all = &prep.model.colliders;
             if solver.backend_name() == "gpu" {
                 "sdf"
+            } else if all.iter().all(|c| c.strategy == first.strategy) {
+                first.strategy.name()
             } else {
-                c.strategy.name()
+                "mixed"
             }
         }),
-        edge_contacts: first_body.map(|c| c.edges.is_some() && solver.backend_name() == "cpu"),
+        edge_contacts: first_body.map(|_| {
+            let any = prep.model.colliders.iter().any(|c| c.edges.is_some());
+            any && solver.backend_name() == "cpu"
+        }),
         max_penetration_m: first_body.map(|_| stats.max_penetration_m),
         body_contacts: first_body.map(|_| stats.body_contacts),
         sdf: first_body.map(|c| c.bake.clone()),

@@ -15,7 +15,7 @@ use drapekit::plan::Pass;
 use drapekit::scene::Scene;
 use drapekit::sim::{prepare, substep_params};
 use drapekit::solver::Solver;
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 fn random_point(rng: &mut Rng, lo: Vec3, hi: Vec3) -> Vec3 {
     Vec3::new(
@@ -223,6 +223,54 @@ fn parity_collide_body() {
     // Positions are O(0.5 m): one f32 rounding is 3e-8 m; the projection adds a handful of
     // roundings (trilinear φ, normalisation), so 1e-6 m is ample and still far below the
     // millimetre corrections being compared. Velocities are O(1 m/s): the same reasoning.
+    let dx = max_abs_diff(&g.positions, &cpu.pos);
+    let dv = max_abs_diff(&g.velocities, &cpu.vel);
+    assert!(dx <= 1e-6, "positions differ by {dx} m");
+    assert!(dv <= 1e-5, "velocities differ by {dv} m/s");
+}
+
+#[test]
+fn parity_collide_body_with_two_bodies() {
+    // The clamp closed 4.5 mm above the table: the kernel reads the clamp's SDF nodes at its
+    // offset in the shared texture (the CPU twin has a slice per body), and both take the
+    // table, then the clamp, for each particle.
+    let Some(ctx) = gpu() else { return };
+    let (prep, state, step) = common::pinched();
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
+    cpu.set_state(&state);
+    gpu.set_state(&state);
+    cpu.run_pass(Pass::CollideBody, &step);
+    gpu.run_passes(&[Pass::CollideBody], &[step]).unwrap();
+    let g = gpu.state().unwrap();
+    // Where both faces are flat (one 5 mm SDF cell inside their edges) the SDFs are planar and
+    // trilinear interpolation is exact, so up to f32 rounding (1e-8 m at these coordinates):
+    // under the clamp every particle ends at the clamp's 3 mm thickness below its face (4.5 mm
+    // up), whatever the table did first; beside the clamp, on the table, none ends below 3 mm.
+    let (clamp, table, thickness, cell) = (0.05f32, 0.1f32, 3e-3f32, 5e-3f32);
+    let within = |p: Vec4, half: f32| p.x.abs() < half && p.z.abs() < half;
+    let mut under = 0;
+    for (i, (start, end)) in state.positions.iter().zip(&cpu.pos).enumerate() {
+        if within(*start, clamp - cell) {
+            under += 1;
+            let y = end.y;
+            assert!(
+                (y - (4.5e-3 - thickness)).abs() < 1e-6,
+                "particle {i} under the clamp at {y} m"
+            );
+        } else if within(*start, table - cell) && !within(*start, clamp + thickness + cell) {
+            let expect = start.y.max(thickness);
+            assert!(
+                (end.y - expect).abs() < 1e-6,
+                "particle {i} beside the clamp at {} m",
+                end.y
+            );
+        }
+    }
+    // The 14 × 14 grid (2.3 cm apart) puts 4 × 4 particles within 4.5 cm of the centre.
+    assert_eq!(under, 16);
+    // As parity_collide_body (positions O(0.2 m) here); a body sampled at the wrong nodes
+    // would move particles by millimetres.
     let dx = max_abs_diff(&g.positions, &cpu.pos);
     let dv = max_abs_diff(&g.velocities, &cpu.vel);
     assert!(dx <= 1e-6, "positions differ by {dx} m");

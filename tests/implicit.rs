@@ -130,6 +130,37 @@ fn parity_vbd_stages() {
 }
 
 #[test]
+fn parity_vbd_stages_with_two_bodies() {
+    // The pinched cotton as shipped (implicit), its clamp closed: every vertex's Newton step
+    // adds the table's and the clamp's contact, each sampled at its own SDF nodes.
+    let Some(ctx) = gpu() else { return };
+    let (prep, state, step) = common::pinched();
+    assert!(prep.plan.contains(Pass::VbdSolve) && prep.model.colliders.len() == 2);
+    let passes = [Pass::VbdInit, Pass::VbdSolve, Pass::VbdFinish];
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
+    cpu.set_state(&state);
+    gpu.set_state(&state);
+    for &p in &passes {
+        cpu.run_pass(p, &step);
+    }
+    gpu.run_passes(&passes, &[step]).unwrap();
+    let g = gpu.state().unwrap();
+    // As parity_vbd_stages: up to an ulp per sweep, here of coordinates up to x_max.
+    let x_max = (state.positions.iter())
+        .map(|p| p.truncate().abs().max_element())
+        .fold(0.0f32, f32::max);
+    let tx = prep.params.iterations as f32 * 2f32.powi(-23) * x_max;
+    let dx = max_abs_diff(&g.positions, &cpu.pos);
+    eprintln!("two bodies: dx {dx:.2e} m (bound {tx:.2e} m)");
+    assert!(dx <= tx, "positions differ by {dx} m");
+    assert!(
+        max_abs_diff(&g.positions, &state.positions) > 1e-4,
+        "the step moved nothing"
+    );
+}
+
+#[test]
 fn trajectory_parity_implicit() {
     let Some(ctx) = gpu() else { return };
     let prep = prepare(&stiff_hanging(1, true)).unwrap();

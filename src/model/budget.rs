@@ -133,6 +133,37 @@ pub fn check_gpu_textures(scene: &Scene, max_texels: u64) -> Result<(), InputErr
     ))
 }
 
+/// Refuses, before any SDF is baked, bodies whose SDF nodes together would not fit the GPU's
+/// largest texture (the kernels read every body's nodes from one texture), naming the body
+/// with the most nodes and a spacing that fits (nodes fall with the cube of the spacing).
+pub fn check_sdf_textures(scene: &Scene, max_texels: u64) -> Result<(), InputError> {
+    let c = scene.checker();
+    let mut nodes = Vec::new();
+    for (i, b) in scene.bodies.iter().enumerate() {
+        let body = super::build_body(b, &c, &scene.body_table(i))?;
+        let (_, dims) = crate::body::sdf::grid_for(&body, b.sdf_resolution, b.sdf_margin);
+        nodes.push(dims.iter().map(|&d| d as u64).product::<u64>());
+    }
+    let total: u64 = nodes.iter().sum();
+    if total <= max_texels {
+        return Ok(());
+    }
+    let (i, _) = (nodes.iter().enumerate())
+        .max_by_key(|(_, &n)| n)
+        .expect("a body has nodes");
+    let b = &scene.bodies[i];
+    let suggested = b.sdf_resolution * (total as f32 / max_texels as f32).cbrt() * 1.05;
+    Err(c.err(
+        &scene.body_table(i),
+        "sdf_resolution_m",
+        format!(
+            "the bodies' SDFs have {total} nodes together, above this adapter's {max_texels} \
+             (its largest 2D texture holds them all)"
+        ),
+        format!("use sdf_resolution_m = {suggested:.4} or coarser, or run with --backend cpu"),
+    ))
+}
+
 /// The same check on a built model (an OBJ cloth has no estimate): its largest array.
 pub fn check_model_textures(
     scene: &Scene,

@@ -187,3 +187,30 @@ pub fn finite(row: &std::collections::HashMap<String, String>, column: &str) -> 
     assert!(v.is_finite(), "{column} = {v} in {row:?}");
     v
 }
+
+/// The shipped two-body scene with its clamp closed (frame 8, 0.33 s: the clamp's underside
+/// 4.5 mm above the table's top at y = 0), and a state with the cloth flattened onto the table
+/// and every particle lifted by a random height from −1.5 to 6 mm, moving at up to 0.5 m/s:
+/// particles in and out of both bodies' 3 mm contact shells, under the clamp and beside it.
+/// Returns the prepared scene, the state and that frame's first substep.
+pub fn pinched() -> (
+    drapekit::sim::Prepared,
+    ParticleState,
+    drapekit::model::layout::SubstepParams,
+) {
+    let scene = drapekit::scene::Scene::load(&fixture("scenes/cloth_pinched.toml")).unwrap();
+    let prep = drapekit::sim::prepare(&scene).unwrap();
+    let flat = ParticleState {
+        positions: (prep.model.positions.iter().zip(&prep.model.masses))
+            .map(|(p, &m)| glam::Vec3::new(p.x, 0.0, p.z).extend(1.0 / m))
+            .collect(),
+        velocities: vec![Vec4::ZERO; prep.model.len()],
+    };
+    let mut state = perturbed(&flat, 17, 0.0, 0.5);
+    let mut rng = Rng::new(18);
+    for p in &mut state.positions {
+        p.y = 2.25e-3 + 3.75e-3 * rng.signed();
+    }
+    let step = drapekit::sim::substep_params(&prep, 8)[0];
+    (prep, state, step)
+}
