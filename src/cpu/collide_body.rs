@@ -80,15 +80,17 @@ fn safe_normalize(v: Vec3) -> Vec3 {
     }
 }
 
-/// Collides every particle with every body through its SDF (`sdfs[b]` holds body b's nodes), the
-/// bodies in scene order (in place: each particle reads and writes only its own state, so
-/// particles run in parallel).
+/// Collides every particle with the first `bodies` bodies, in scene order (in place: each
+/// particle reads and writes only its own state, so particles run in parallel). `query(b, p)`
+/// gives body b's φ (w) and ∇φ (xyz) at body-frame point p: its SDF sampled as the kernel
+/// samples it (`sample_body_sdf`), or another CPU strategy's answer.
 pub fn collide_body(
     params: &SimParams,
     step: &SubstepParams,
     pos: &mut [Vec4],
     vel: &mut [Vec4],
-    sdfs: &[&[f32]],
+    bodies: usize,
+    query: impl Fn(usize, Vec3) -> Vec4 + Sync,
 ) {
     let n = params.num_particles as usize;
     let state = (&mut pos[..n], &mut vel[..n]);
@@ -97,11 +99,9 @@ pub fn collide_body(
             return;
         }
         let (mut x, mut v) = (pos.truncate(), vel.truncate());
-        for (b, sdf) in sdfs.iter().enumerate().take(params.num_bodies as usize) {
+        for b in 0..bodies {
             let body = &params.bodies[b];
-            (x, v) = collide_particle(body, &step.bodies[b], x, v, |p| {
-                sample_body_sdf(body, sdf, p)
-            });
+            (x, v) = collide_particle(body, &step.bodies[b], x, v, |p| query(b, p));
         }
         *pos = x.extend(pos.w);
         *vel = v.extend(0.0);

@@ -51,7 +51,6 @@ use crate::model::{ClothModel, Csr};
 use crate::plan::{HingeEvaluation, Pass, PassPlan};
 use crate::solver::{relative_residual, AdapterReport, ParticleState, SolveProgress, Solver};
 use glam::Vec4;
-use rayon::prelude::*;
 
 /// The CPU backend. Holds data only for the stages in its plan.
 pub struct CpuSolver {
@@ -423,30 +422,16 @@ impl CpuSolver {
     /// queries, all driving the same response, body after body for each particle as the kernel
     /// does; then the edge contacts of the bodies that take them.
     fn collide(&mut self, step: &SubstepParams) {
-        use crate::body::Strategy;
         let p = &self.params;
         let colliders = &self.colliders[..(p.num_bodies as usize).min(self.colliders.len())];
-        if colliders.iter().all(|c| c.strategy == Strategy::Sdf) {
-            let sdfs: Vec<&[f32]> = colliders.iter().map(|c| &c.sdf.values[..]).collect();
-            collide_body(p, step, &mut self.pos, &mut self.vel, &sdfs);
-        } else {
-            let n = p.num_particles as usize;
-            let state = (&mut self.pos[..n], &mut self.vel[..n]);
-            state.into_par_iter().for_each(|(pos, vel)| {
-                if pos.w == 0.0 {
-                    return;
-                }
-                let (mut x, mut v) = (pos.truncate(), vel.truncate());
-                for (b, c) in colliders.iter().enumerate() {
-                    let body = &p.bodies[b];
-                    (x, v) = collide_particle(body, &step.bodies[b], x, v, |x| {
-                        strategy_query(body, c, x)
-                    });
-                }
-                *pos = x.extend(pos.w);
-                *vel = v.extend(0.0);
-            });
-        }
+        collide_body(
+            p,
+            step,
+            &mut self.pos,
+            &mut self.vel,
+            colliders.len(),
+            |b, x| strategy_query(&p.bodies[b], &colliders[b], x),
+        );
         for (b, c) in colliders.iter().enumerate() {
             if c.edges.is_some() {
                 let (body, pose) = (&p.bodies[b], &step.bodies[b]);
