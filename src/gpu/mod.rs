@@ -1,6 +1,7 @@
 //! The wgpu path: adapter choice, kernel composition and the solver.
 
 mod context;
+mod elements;
 mod encode;
 pub mod kernels;
 mod pipelines;

@@ -7,6 +7,7 @@
 //! and reads `forces[(j + 1) % 2]`, except the first, which starts from zero.
 
 use super::context::GpuContext;
+use super::elements::{element_arrays, stage_elements};
 use super::kernels::{compose_with, ForceInput, VbdEnergies};
 use super::pipelines::{build_stage, Binding, Stage};
 use super::texels::TexelArray;
@@ -17,7 +18,7 @@ use crate::plan::{HingeEvaluation, Pass, PassPlan};
 use crate::solver::{AdapterReport, ParticleState, Solver};
 use glam::Vec4;
 use wgpu::util::DeviceExt;
-use wgpu::TextureFormat::{R32Float, R32Uint, Rgba32Float, Rgba32Uint};
+use wgpu::TextureFormat::{R32Uint, Rgba32Float};
 
 /// The self-collision spatial hash on the GPU.
 pub(super) struct HashBuffers {
@@ -629,180 +630,5 @@ impl Solver for GpuSolver {
             positions,
             velocities,
         })
-    }
-}
-
-/// Which element arrays a stage binds, in binding order.
-#[derive(Clone, Copy)]
-enum Elements {
-    Springs,
-    Hinges,
-    /// Hinge offsets (their total counts the hinges), the hinges and their slots (for
-    /// `hinge_forces`).
-    HingeSlots,
-    /// Hinge offsets (for `integrate`'s gather).
-    HingeOffsets,
-    Seams,
-    Triangles,
-    SelfNeighbours,
-    Sdf,
-}
-
-fn stage_elements(pass: Pass, energies: VbdEnergies) -> Vec<Elements> {
-    match pass {
-        Pass::SpringForces | Pass::StrainLimit | Pass::Monitor => vec![Elements::Springs],
-        Pass::HingeForces => vec![Elements::HingeSlots],
-        Pass::BendingForces => vec![Elements::Hinges],
-        Pass::WindForces => vec![Elements::Triangles],
-        Pass::SeamForces => vec![Elements::Seams],
-        Pass::SelfCollide => vec![Elements::SelfNeighbours],
-        Pass::CollideBody => vec![Elements::Sdf],
-        Pass::VbdSolve => {
-            let mut kinds = vec![Elements::Springs];
-            if energies.bending {
-                kinds.push(Elements::Hinges);
-            }
-            if energies.seams {
-                kinds.push(Elements::Seams);
-            }
-            if energies.body {
-                kinds.push(Elements::Sdf);
-            }
-            kinds
-        }
-        // `integrate` gathers the bending forces when the plan evaluates hinges.
-        Pass::Integrate if energies.bending => vec![Elements::HingeOffsets],
-        Pass::HashClear
-        | Pass::HashCount
-        | Pass::HashScan
-        | Pass::HashFill
-        | Pass::VbdInit
-        | Pass::VbdFinish
-        | Pass::Integrate => vec![],
-    }
-}
-
-/// Where each hinge's four forces go on the GPU: the CSR slots of its refs, `[u32; 4]` per
-/// hinge. `hinge_forces` scatters to them and `integrate` then reads each particle's bending
-/// forces as one contiguous run of texels, in CSR order (the CPU twin keeps the forces in ref
-/// order, `4·h + role`, and gathers through the refs: the same numbers, the same sum order).
-pub(super) fn hinge_slots(refs: &[u32]) -> Vec<u32> {
-    let mut slots = vec![0u32; refs.len()];
-    for (k, &r) in refs.iter().enumerate() {
-        slots[r as usize] = k as u32;
-    }
-    slots
-}
-
-/// The texel arrays of one kind of element: (label, texel format, bytes).
-fn element_arrays(
-    model: &ClothModel,
-    kind: Elements,
-) -> Vec<(&'static str, wgpu::TextureFormat, Vec<u8>)> {
-    let bytes = |data: &[u8]| data.to_vec();
-    match kind {
-        Elements::Springs | Elements::SelfNeighbours => {
-            let csr = model.spring_csr();
-            let (offsets, items) = match kind {
-                Elements::Springs => ("spring_offsets", "springs"),
-                _ => ("self_neighbour_offsets", "self_neighbours"),
-            };
-            vec![
-                (offsets, R32Uint, bytes(bytemuck::cast_slice(&csr.offsets))),
-                (items, Rgba32Uint, bytes(bytemuck::cast_slice(&csr.items))),
-            ]
-        }
-        Elements::HingeSlots => {
-            let csr = model.hinge_csr();
-            vec![
-                (
-                    "hinge_offsets",
-                    R32Uint,
-                    bytes(bytemuck::cast_slice(&csr.offsets)),
-                ),
-                (
-                    "hinges",
-                    Rgba32Uint,
-                    bytes(bytemuck::cast_slice(&model.hinges)),
-                ),
-                (
-                    "hinge_slots",
-                    Rgba32Uint,
-                    bytes(bytemuck::cast_slice(&hinge_slots(&csr.items))),
-                ),
-            ]
-        }
-        Elements::HingeOffsets => {
-            let csr = model.hinge_csr();
-            vec![(
-                "hinge_offsets",
-                R32Uint,
-                bytes(bytemuck::cast_slice(&csr.offsets)),
-            )]
-        }
-        Elements::Hinges => {
-            let csr = model.hinge_csr();
-            vec![
-                (
-                    "hinge_offsets",
-                    R32Uint,
-                    bytes(bytemuck::cast_slice(&csr.offsets)),
-                ),
-                (
-                    "hinge_refs",
-                    R32Uint,
-                    bytes(bytemuck::cast_slice(&csr.items)),
-                ),
-                (
-                    "hinges",
-                    Rgba32Uint,
-                    bytes(bytemuck::cast_slice(&model.hinges)),
-                ),
-            ]
-        }
-        Elements::Seams => {
-            let csr = model.seam_csr();
-            vec![
-                (
-                    "seam_offsets",
-                    R32Uint,
-                    bytes(bytemuck::cast_slice(&csr.offsets)),
-                ),
-                (
-                    "seam_refs",
-                    R32Uint,
-                    bytes(bytemuck::cast_slice(&csr.items)),
-                ),
-                (
-                    "seams",
-                    Rgba32Uint,
-                    bytes(bytemuck::cast_slice(&model.seams)),
-                ),
-            ]
-        }
-        Elements::Triangles => {
-            let csr = model.triangle_csr();
-            let tris = model.packed_triangles();
-            vec![
-                (
-                    "triangle_offsets",
-                    R32Uint,
-                    bytes(bytemuck::cast_slice(&csr.offsets)),
-                ),
-                (
-                    "triangle_refs",
-                    R32Uint,
-                    bytes(bytemuck::cast_slice(&csr.items)),
-                ),
-                ("triangles", Rgba32Uint, bytes(bytemuck::cast_slice(&tris))),
-            ]
-        }
-        Elements::Sdf => {
-            // Every body's nodes one after another, as `BodyParams::sdf_dims.w` counts them.
-            let nodes: Vec<f32> = (model.colliders.iter())
-                .flat_map(|c| c.sdf.values.iter().copied())
-                .collect();
-            vec![("sdf", R32Float, bytes(bytemuck::cast_slice(&nodes)))]
-        }
     }
 }
