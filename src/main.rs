@@ -461,8 +461,26 @@ fn report(summary: &drapekit::output::Summary, out_dir: &std::path::Path) {
         summary.wall_seconds,
         summary.particle_substeps_per_second
     );
+    if let Some(c) = &summary.coarse_start {
+        println!(
+            "coarse start: {} particles at {:.3} m spacing, {} at frame {} in {:.2} s; the full \
+             mesh went on from there",
+            c.particles,
+            c.particle_distance_m,
+            if c.settled_frame.is_some() {
+                "settled"
+            } else {
+                "not settled"
+            },
+            c.frame,
+            c.wall_seconds
+        );
+    }
     if let Some(s) = &summary.settled {
-        println!("settled at frame {} ({})", s.frame, s.rule);
+        println!(
+            "settled at frame {} ({} {:.2e} m/s)",
+            s.frame, s.rule, s.rms_speed_m_s
+        );
     }
     println!(
         "wrote {} files to {}",

@@ -56,12 +56,15 @@ pub struct Summary {
     /// the largest Newton step of the last sweep over that of the first sweep (steps under
     /// 1 µm count as 1 µm), i.e. how much of the step's correction the sweeps left undone.
     pub max_residual: Option<f32>,
-    /// Simulated time in s.
+    /// Simulated time in s (with a coarse start, its frames too).
     pub simulated_seconds: f64,
-    /// Wall time of stepping and readback in s (setup and file writing excluded).
+    /// Wall time of stepping and readback in s (setup and file writing excluded; with a
+    /// coarse start, all of its time too).
     pub wall_seconds: f64,
-    /// Particles × substeps / wall_seconds.
+    /// Particles × substeps / wall time, of the full mesh's frames only.
     pub particle_substeps_per_second: f64,
+    /// The coarse start the full mesh continued from (`None`: none).
+    pub coarse_start: Option<crate::sim::CoarseStart>,
     /// The pass plan, by stage name.
     pub passes: Vec<&'static str>,
     /// Largest spring strain at any output frame.
@@ -112,6 +115,9 @@ pub struct Summary {
     pub finite: bool,
     /// Set when the settle rule stopped the run early.
     pub settled: Option<Settled>,
+    /// The settle rule's speed at the last frame (the free particles' RMS displacement over
+    /// the frame, per second), in m/s, whether or not the scene has the rule.
+    pub last_frame_rms_speed_m_s: Option<f64>,
     /// Warnings about the setup.
     pub warnings: Vec<String>,
     /// The error that stopped the run, if any.

@@ -10,7 +10,9 @@ use crate::model::layout::{INTEGRATOR_EXPLICIT, INTEGRATOR_IMPLICIT};
 use crate::output::Summary;
 use crate::preview::RunPreviews;
 use crate::scene::Scene;
-use crate::sim::{prepare, simulate_from, Prepared, ResumeFrom, RunStats};
+use crate::sim::{
+    map_state, prepare, simulate, simulate_from, CoarseStart, Prepared, ResumeFrom, RunStats,
+};
 use crate::solver::Solver;
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -223,6 +225,18 @@ fn run_scene_from(
     for w in &warnings {
         eprintln!("drapekit: warning: {w}");
     }
+    // Before the output folder exists: a coarse start that cannot settle is bad input. A
+    // resumed run continues from its checkpoint, past any coarse start.
+    let coarse = match (&scene.cloth, &resume) {
+        (
+            crate::scene::ClothSource::Pattern {
+                coarse_start: Some(distance),
+                ..
+            },
+            None,
+        ) => Some(coarse_start(&scene, *distance, device.as_ref(), &prep)?),
+        _ => None,
+    };
     let out_dir = opts
         .out_dir
         .clone()
@@ -233,7 +247,10 @@ fn run_scene_from(
     let mut stats = RunStats::default();
     let mut exporter = Exporter::new(&prep, &scene.output, &out_dir);
     let resume = match resume {
-        None => None,
+        None => coarse.map(|(from, coarse_stats)| {
+            stats = coarse_stats;
+            from
+        }),
         Some(c) => {
             if c.header.particles != prep.model.len() {
                 return Err(Error::Input(crate::error::InputError::new(
@@ -381,11 +398,21 @@ fn run_scene_from(
         max_residual: stats.max_residual,
         simulated_seconds: substeps_run * prep.params.dt as f64,
         wall_seconds: stats.wall_seconds,
-        particle_substeps_per_second: if stats.wall_seconds > 0.0 {
-            prep.model.len() as f64 * substeps_run / stats.wall_seconds
-        } else {
-            0.0
+        particle_substeps_per_second: {
+            // The full mesh's frames and time: the coarse start's are its own.
+            let (frames, wall) = match &stats.coarse_start {
+                Some(c) => (c.frame, c.wall_seconds),
+                None => (0, 0.0),
+            };
+            let substeps = stats.frames_run.saturating_sub(frames) as f64 * prep.substeps as f64;
+            let wall = stats.wall_seconds - wall;
+            if wall > 0.0 {
+                prep.model.len() as f64 * substeps / wall
+            } else {
+                0.0
+            }
         },
+        coarse_start: stats.coarse_start.clone(),
         // The stages the backend ran: each evaluates hinges its own way.
         passes: prep
             .plan
@@ -434,6 +461,7 @@ fn run_scene_from(
         released_after_frame: stats.released_after_frame,
         finite: stats.finite,
         settled: stats.settled.clone(),
+        last_frame_rms_speed_m_s: stats.frame_speed_m_s,
         warnings,
         error: result.as_ref().err().map(|e| e.to_string()),
         outputs,
@@ -441,6 +469,83 @@ fn run_scene_from(
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
     write_atomic(&out_dir.join("summary.json"), json.as_bytes())?;
     result.map(|_| summary)
+}
+
+/// Sews and drapes `scene`'s garment at `distance` spacing until it settles (or its frames
+/// end) and maps the result onto `fine`'s mesh: where the full-resolution run continues from,
+/// and its stats so far (what the coarse start did, the seams' state, its time).
+fn coarse_start(
+    scene: &Scene,
+    distance: f64,
+    device: Option<&GpuContext>,
+    fine: &Prepared,
+) -> Result<(ResumeFrom, RunStats), Error> {
+    let started = std::time::Instant::now();
+    let mut coarse = scene.clone();
+    if let crate::scene::ClothSource::Pattern {
+        options,
+        coarse_start,
+        ..
+    } = &mut coarse.cloth
+    {
+        options.particle_distance = distance;
+        *coarse_start = None;
+    }
+    let prep = prepare(&coarse)?;
+    let mut solver = build_solver(&prep, device)?;
+    let mut stats = RunStats::default();
+    simulate(&prep, solver.as_mut(), &mut stats, |_, _| Ok(())).map_err(|e| match e {
+        Error::Unstable(m) => Error::Unstable(format!(
+            "the coarse start (coarse_start_distance_m = {distance}): {m}"
+        )),
+        e => e,
+    })?;
+    let frame = stats.frames_run;
+    if stats.settled.is_none() || frame >= fine.frames {
+        return Err(scene
+            .error(
+                "cloth.pattern",
+                "coarse_start_distance_m",
+                format!(
+                    "the coarse start ({} particles at {distance:.3} m) {} within the scene's {} \
+                     frames (its speed at frame {frame}: {:.2e} m/s, against settle_speed_m_s), \
+                     so no frame is left for the full mesh",
+                    prep.model.len(),
+                    if stats.settled.is_none() {
+                        "did not settle"
+                    } else {
+                        "settled only at the last frame"
+                    },
+                    fine.frames,
+                    stats.frame_speed_m_s.unwrap_or(f64::NAN),
+                ),
+                "raise solver.frames, use a finer coarse_start_distance_m, or remove it",
+            )
+            .into());
+    }
+    let (state, gap) = map_state(&prep, &solver.state()?, fine, frame)
+        .ok_or_else(|| Error::Gpu("a coarse start needs a pattern on both meshes".into()))?;
+    let wall_seconds = started.elapsed().as_secs_f64();
+    let record = CoarseStart {
+        particle_distance_m: distance,
+        particles: prep.model.len(),
+        frame,
+        settled_frame: stats.settled.as_ref().map(|s| s.frame),
+        seams_closed_frame: stats.seams_closed_frame,
+        max_edge_strain: stats.max_edge_strain,
+        wall_seconds,
+        max_pattern_gap_m: gap,
+    };
+    let continued = RunStats {
+        frames_run: frame,
+        wall_seconds,
+        finite: true,
+        seams_closed_frame: stats.seams_closed_frame,
+        released_after_frame: stats.released_after_frame,
+        coarse_start: Some(record),
+        ..RunStats::default()
+    };
+    Ok((ResumeFrom { frame, state }, continued))
 }
 
 /// A frame counter with simulated time, throughput and the time left, on stderr; hidden when

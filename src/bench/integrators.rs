@@ -68,7 +68,7 @@ pub fn run_cli(
             scene.solver.frames = f;
         }
         // Every point runs the same frames.
-        scene.solver.settle_ke_per_particle = None;
+        scene.solver.settle_speed = None;
         let failed = |backend, error: String| IntegratorRow {
             integrator: name,
             backend,

@@ -5,6 +5,7 @@
 pub mod curve;
 pub mod garment;
 pub mod mesher;
+pub mod transfer;
 
 use crate::error::InputError;
 use curve::{relative_point, Curve};

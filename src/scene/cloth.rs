@@ -32,6 +32,10 @@ pub enum ClothSource {
         path: PathBuf,
         /// Meshing and placement options.
         options: GarmentOptions,
+        /// Particle spacing of the coarse start, in m: the run first sews and drapes the
+        /// garment meshed this coarsely until it settles, then continues at `options`'
+        /// spacing from there (`None`: no coarse start).
+        coarse_start: Option<f64>,
         /// Seam pair stiffness in N/m.
         seam_stiffness: f32,
         /// Time over which seam rest gaps shrink from the placed gap to 0, in s; 0: seams pull
@@ -105,8 +109,29 @@ pub(super) fn parse(
                     },
                 );
             }
+            let coarse_start = match p.coarse_start_distance_m {
+                None => None,
+                Some(given) => {
+                    let d = c.within(t, "coarse_start_distance_m", given, (1e-3, 0.5), "m")?;
+                    if given <= p.particle_distance_m {
+                        return Err(c.err(
+                            t,
+                            "coarse_start_distance_m",
+                            format!(
+                                "the coarse start's spacing {given} m is not coarser than \
+                                 particle_distance_m = {} m",
+                                p.particle_distance_m
+                            ),
+                            "give a larger spacing (such as 4× particle_distance_m), or remove \
+                             coarse_start_distance_m",
+                        ));
+                    }
+                    Some(d as f64)
+                }
+            };
             ClothSource::Pattern {
                 path: base.join(&p.path),
+                coarse_start,
                 options: GarmentOptions {
                     // Below 1 mm a garment has tens of millions of particles; above 0.5 m
                     // no panel has an interior.

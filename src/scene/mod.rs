@@ -121,6 +121,22 @@ impl Scene {
         let solver = solver::parse_solver(&c, &raw.solver)?;
         let output = solver::parse_output(&c, path, &raw.output)?;
         let preview = preview::parse(&c, &raw.output, raw.preview.as_ref(), output.obj)?;
+        let coarse_start = matches!(
+            cloth,
+            ClothSource::Pattern {
+                coarse_start: Some(_),
+                ..
+            }
+        );
+        if coarse_start && solver.settle_speed.is_none() {
+            return Err(c.err(
+                "cloth.pattern",
+                "coarse_start_distance_m",
+                "the coarse start runs until the coarse garment settles, and the scene has no \
+                 settle rule",
+                "add [solver] settle_speed_m_s (such as 0.005), or remove coarse_start_distance_m",
+            ));
+        }
         Ok(Scene {
             path: path.to_path_buf(),
             source: src.to_string(),

@@ -47,6 +47,7 @@ pub(super) struct RawPattern {
     pub(super) path: String,
     #[serde(default = "default_particle_distance")]
     pub(super) particle_distance_m: f64,
+    pub(super) coarse_start_distance_m: Option<f64>,
     pub(super) seam_stiffness_n_m: Option<f64>,
     pub(super) seam_sewing_time_s: Option<f64>,
     #[serde(default = "default_closed_gap")]
@@ -196,6 +197,8 @@ pub(super) struct RawSolver {
     #[serde(default = "default_iterations")]
     pub(super) iterations: i64,
     pub(super) tolerance: Option<f64>,
+    pub(super) settle_speed_m_s: Option<f64>,
+    /// Replaced by `settle_speed_m_s`; read only to say so.
     pub(super) settle_ke_per_particle_j: Option<f64>,
     #[serde(default = "default_max_substeps")]
     pub(super) max_substeps_per_frame: i64,

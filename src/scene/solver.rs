@@ -28,8 +28,9 @@ pub struct SolverSettings {
     /// Implicit Euler stops sweeping a substep once an iteration's largest Newton step is this
     /// fraction of the first iteration's (`None`: always `iterations`).
     pub tolerance: Option<f32>,
-    /// Stop once kinetic energy per free particle falls below this (J).
-    pub settle_ke_per_particle: Option<f32>,
+    /// Stop once the free particles' RMS speed, √(2·kinetic energy / their mass), falls
+    /// below this (m/s): the same rule at every particle spacing.
+    pub settle_speed: Option<f32>,
     /// The most substeps per frame `auto` may choose before the scene is refused.
     pub max_substeps_per_frame: u32,
     /// A frame with any spring strain above this is exploded: the run stops before writing it.
@@ -120,9 +121,21 @@ pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings,
                 "(a fraction of the first sweep's largest step: 0.01 = 1%)",
             )?),
         },
-        settle_ke_per_particle: match s.settle_ke_per_particle_j {
-            None => None,
-            Some(v) => Some(c.positive("solver", "settle_ke_per_particle_j", v, "J")?),
+        settle_speed: match (s.settle_speed_m_s, s.settle_ke_per_particle_j) {
+            (_, Some(_)) => {
+                return Err(c.err(
+                    "solver",
+                    "settle_ke_per_particle_j",
+                    "the settle rule is now a speed: energy per particle meant a different \
+                     speed at every particle spacing",
+                    "write settle_speed_m_s = v, the RMS speed below which the cloth counts as \
+                     at rest (1e-9 J per particle of mass m is v = √(2e-9 / m))",
+                ))
+            }
+            (None, None) => None,
+            (Some(v), None) => {
+                Some(c.within("solver", "settle_speed_m_s", v, (1e-6, 10.0), "m/s")?)
+            }
         },
         max_substeps_per_frame: c.count(
             "solver",

@@ -194,7 +194,7 @@ impl Sweep {
         scene.solver.frames = self.frames;
         scene.solver.max_substeps_per_frame = self.max_substeps;
         // Every point runs the same frames, so that all are compared at the same time.
-        scene.solver.settle_ke_per_particle = None;
+        scene.solver.settle_speed = None;
         scene.solver.substeps = match s.step {
             Step::Fixed(n) => Some(n),
             Step::Auto(_) => None,

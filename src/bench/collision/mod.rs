@@ -210,7 +210,7 @@ fn scaled(scene: &Scene, scale: u32) -> Scene {
         ClothSource::Mesh { .. } => {}
     }
     // Every size runs to the same frames, and the warm-up state is the only CPU strategy's.
-    s.solver.settle_ke_per_particle = None;
+    s.solver.settle_speed = None;
     if let Some(b) = s.bodies.first_mut() {
         b.strategy = Strategy::Sdf;
         b.edge_contacts = false;
