@@ -329,7 +329,13 @@ fn execute(command: Command) -> Result<(), Error> {
         Command::Plan { scene, json } => {
             let scene = Scene::load(&scene)?;
             let prep = drapekit::sim::prepare(&scene)?;
+            let coarse_start = match &scene.cloth {
+                drapekit::scene::ClothSource::Pattern { coarse_start, .. } => *coarse_start,
+                _ => None,
+            };
             let plan = serde_json::json!({
+                // As the scene gave it (the f32 the scene keeps, printed shortest).
+                "coarse_start_distance_m": coarse_start.map(|d| (d as f32).to_string().parse::<f64>().unwrap_or(d)),
                 "passes": prep.plan.names(),
                 "particles": prep.model.len(),
                 "triangles": prep.model.triangles.len(),
@@ -360,6 +366,12 @@ fn execute(command: Command) -> Result<(), Error> {
                         "from the scene"
                     }
                 );
+                if let Some(d) = coarse_start {
+                    println!(
+                        "  starts from the garment meshed at {d:.3} m, sewn and draped until it \
+                         settles (coarse start)"
+                    );
+                }
                 for (k, pass) in prep.plan.passes.iter().enumerate() {
                     println!(
                         "  {}. {:<15} kernels/{}.wgsl  ↔  src/cpu/{}.rs",

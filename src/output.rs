@@ -85,7 +85,8 @@ pub struct Summary {
     pub max_seam_gap_m: Option<f32>,
     /// Largest pair gap of each seam (stitch order) at the last frame, in m.
     pub seam_gaps_m: Vec<f32>,
-    /// The first output frame at which every seam was closed.
+    /// The first output frame at which every seam was closed (after a coarse start, the coarse
+    /// garment's).
     pub seams_closed_frame: Option<u32>,
     /// Collision bodies in the scene.
     pub bodies: usize,

@@ -246,6 +246,7 @@ fn run_scene_from(
     let mut outputs = Vec::new();
     let mut stats = RunStats::default();
     let mut exporter = Exporter::new(&prep, &scene.output, &out_dir);
+    let coarse_started = coarse.is_some();
     let resume = match resume {
         None => coarse.map(|(from, coarse_stats)| {
             stats = coarse_stats;
@@ -302,10 +303,17 @@ fn run_scene_from(
         }
         .write(&out_dir)
     };
+    if coarse_started {
+        // The full mesh's flat panels as frame 0, as every run has it: the strain preview's
+        // rest shape. OBJ only: the caches hold the simulated frames, evenly spaced.
+        outputs.extend(exporter.rest_frame(&prep.model.positions)?);
+    }
     let mut previews = RunPreviews::new(&scene, &opts.adapter, &out_dir);
     let bar = progress_bar(opts.progress, prep.frames);
     let particle_substeps = prep.model.len() as f64 * prep.substeps as f64;
     let started = std::time::Instant::now();
+    // Frames this call simulates start after a checkpoint's or a coarse start's frame.
+    let start_frame = resume.as_ref().map_or(0, |r| r.frame);
     let result = simulate_from(
         &prep,
         solver.as_mut(),
@@ -330,7 +338,8 @@ fn run_scene_from(
                 });
             }
             if frame > 0 {
-                let rate = particle_substeps * frame as f64 / started.elapsed().as_secs_f64();
+                let rate = particle_substeps * (frame - start_frame) as f64
+                    / started.elapsed().as_secs_f64();
                 bar.set_message(format!(
                     "{:.2} s simulated, {rate:.2e} particle-substeps/s",
                     frame as f32 * prep.frame_dt
@@ -392,7 +401,8 @@ fn run_scene_from(
         iterations: prep.colors.map(|_| prep.params.iterations),
         tolerance: prep.colors.and(scene.solver.tolerance),
         iterations_mean: prep.colors.map(|_| {
-            stats.iterations_run as f64 / (stats.frames_run as f64 * prep.substeps as f64).max(1.0)
+            let frames = stats.frames_run - stats.coarse_start.as_ref().map_or(0, |c| c.frame);
+            stats.iterations_run as f64 / (frames as f64 * prep.substeps as f64).max(1.0)
         }),
         colors: prep.colors,
         max_residual: stats.max_residual,
@@ -492,6 +502,11 @@ fn coarse_start(
         *coarse_start = None;
     }
     let prep = prepare(&coarse)?;
+    eprintln!(
+        "drapekit: coarse start: sewing and draping {} particles at {distance:.3} m until they \
+         settle (a second Ctrl-C stops it at once)",
+        prep.model.len()
+    );
     let mut solver = build_solver(&prep, device)?;
     let mut stats = RunStats::default();
     simulate(&prep, solver.as_mut(), &mut stats, |_, _| Ok(())).map_err(|e| match e {
@@ -507,7 +522,7 @@ fn coarse_start(
                 "cloth.pattern",
                 "coarse_start_distance_m",
                 format!(
-                    "the coarse start ({} particles at {distance:.3} m) {} within the scene's {} \
+                    "the coarse start ({} particles at {distance:.3} m) {} within the run's {} \
                      frames (its speed at frame {frame}: {:.2e} m/s, against settle_speed_m_s), \
                      so no frame is left for the full mesh",
                     prep.model.len(),
@@ -519,15 +534,22 @@ fn coarse_start(
                     fine.frames,
                     stats.frame_speed_m_s.unwrap_or(f64::NAN),
                 ),
-                "raise solver.frames, use a finer coarse_start_distance_m, or remove it",
+                "raise solver.frames (or --frames), use a finer coarse_start_distance_m, or \
+                 remove it",
             )
             .into());
     }
-    let (state, gap) = map_state(&prep, &solver.state()?, fine, frame)
-        .ok_or_else(|| Error::Gpu("a coarse start needs a pattern on both meshes".into()))?;
+    let (state, gap) = map_state(&prep, &solver.state()?, fine, frame).ok_or_else(|| {
+        scene.error(
+            "cloth.pattern",
+            "coarse_start_distance_m",
+            "a coarse start needs a sewing pattern",
+            "remove coarse_start_distance_m",
+        )
+    })?;
     let wall_seconds = started.elapsed().as_secs_f64();
     let record = CoarseStart {
-        particle_distance_m: distance,
+        particle_distance_m: distance as f32,
         particles: prep.model.len(),
         frame,
         settled_frame: stats.settled.as_ref().map(|s| s.frame),

@@ -113,12 +113,21 @@ fn run_coarse_started_shirt(backend: &[&str], tag: &str) -> serde_json::Value {
         settled > start,
         "settled at {settled}, the coarse start ended at {start}"
     );
-    // No full-mesh frame before the coarse start's end is written: the first is the next one
-    // on the `every = 6` schedule.
+    // No simulated full-mesh frame before the coarse start's end is written: the first is the
+    // next one on the `every = 6` schedule. Frame 0 is the full mesh's flat panels (the strain
+    // preview's rest shape), as in every run.
     let first = (start / 6 + 1) * 6;
     assert!(!out.join(format!("frame_{:04}.obj", start)).exists());
+    assert!(!out.join(format!("frame_{:04}.obj", first - 6)).exists());
     assert!(out.join(format!("frame_{first:04}.obj")).is_file());
-    assert!(!out.join("frame_0000.obj").exists());
+    assert!(out.join("frame_0000.obj").is_file());
+    if common::gpu().is_some() {
+        for name in ["preview_fabric.png", "preview_strain.png"] {
+            assert!(out.join(name).is_file(), "{name} missing: {summary:#}");
+        }
+    }
+    // Three sweeps a substep and no tolerance: the mean over the full mesh's frames is 3.
+    assert_eq!(f(&summary["iterations_mean"]), 3.0, "{summary:#}");
     // The same bars as the shirt without a coarse start (tests/cli.rs): seams closed, nothing
     // deeper in the body than the 3 mm thickness, and at most 5% strain at rest.
     assert_eq!(summary["seams_closed"], summary["seams"], "{summary:#}");
@@ -211,4 +220,17 @@ fn a_resumed_coarse_started_run_repeats_the_uninterrupted_one() {
         std::fs::read(parts.join(&last)).unwrap(),
         "{last}"
     );
+}
+
+#[test]
+fn plan_names_the_coarse_start() {
+    let dir = common::out_dir("coarse_start", "plan");
+    let scene = coarse_started_shirt(&dir);
+    let r = common::drapekit(&["plan", scene.to_str().unwrap(), "--json"]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let plan: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    assert_eq!(plan["coarse_start_distance_m"], 0.04);
+    let r = common::drapekit(&["plan", scene.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&r.stdout);
+    assert!(text.contains("meshed at 0.040 m"), "{text}");
 }

@@ -113,6 +113,18 @@ impl<'a> Exporter<'a> {
         Ok(names)
     }
 
+    /// Writes `positions` as `frame_0000.obj` only (no body, not kept for the caches): the rest
+    /// shape of a run that starts later, from a coarse start. Returns the file's name.
+    pub fn rest_frame(&self, positions: &[Vec3]) -> Result<Vec<String>, Error> {
+        if !self.settings.obj {
+            return Ok(Vec::new());
+        }
+        let name = "frame_0000.obj".to_string();
+        let text = obj::cloth_obj(positions, self.triangles, self.uv, &self.groups);
+        self.write(&name, text.as_bytes())?;
+        Ok(vec![name])
+    }
+
     /// Writes the point cache and the glTF binary of the frames seen so far (also after a run
     /// that stopped early) and returns their names.
     pub fn finish(&self) -> Result<Vec<String>, Error> {

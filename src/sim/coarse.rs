@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CoarseStart {
     /// Its particle spacing, in m.
-    pub particle_distance_m: f64,
+    pub particle_distance_m: f32,
     /// Its particles.
     pub particles: usize,
     /// The frame it ended at, from which the full mesh continues.
@@ -46,17 +46,17 @@ pub fn map_state(
     let positions = transfer.apply(&state.positions);
     let velocities = transfer.apply(&state.velocities);
     let model = &fine.model;
-    let held = |i: usize| {
-        model.masses[i] <= 0.0
-            || fine.scene_pins.contains(&(i as u32))
-            || (frame < fine.attach_frames && fine.attached.contains(&(i as u32)))
-    };
+    let mut held: Vec<bool> = model.masses.iter().map(|&m| m <= 0.0).collect();
+    let attached = (frame < fine.attach_frames).then_some(&fine.attached[..]);
+    for &i in fine.scene_pins.iter().chain(attached.unwrap_or(&[])) {
+        held[i as usize] = true;
+    }
     let mut mapped = ParticleState {
         positions: Vec::with_capacity(positions.len()),
         velocities: Vec::with_capacity(positions.len()),
     };
     for (i, (p, v)) in positions.into_iter().zip(velocities).enumerate() {
-        if held(i) {
+        if held[i] {
             // Held particles keep their own place: a pin is where the scene put it.
             mapped.positions.push(model.positions[i].extend(0.0));
             mapped.velocities.push(glam::Vec4::ZERO);
