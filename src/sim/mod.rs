@@ -10,6 +10,7 @@ use crate::model::layout::{
 
 mod bodies;
 mod coarse;
+mod settle;
 use crate::model::BuiltCloth;
 use crate::model::ClothModel;
 use crate::pattern::garment::Garment;
@@ -18,8 +19,9 @@ use crate::scene::{ClothSource, Scene, Wind};
 use crate::solver::{ParticleState, Solver};
 pub use bodies::body_pose;
 pub use coarse::{map_state, CoarseStart};
-use glam::Vec4;
 use serde::{Deserialize, Serialize};
+use settle::frame_speed;
+pub use settle::Settled;
 use std::time::Instant;
 
 /// Fraction of the estimated stable step that `substeps = "auto"` uses.
@@ -396,17 +398,6 @@ pub fn substep_params(prep: &Prepared, frame: u32) -> Vec<SubstepParams> {
         .collect()
 }
 
-/// Why a run ended early.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Settled {
-    /// The frame at which the rule fired.
-    pub frame: u32,
-    /// Which rule fired.
-    pub rule: String,
-    /// The free particles' RMS speed then, in m/s.
-    pub rms_speed_m_s: f64,
-}
-
 /// What a run measured, filled in frame by frame (so it is complete up to a failure). A
 /// checkpoint stores it, so a resumed run reports what the uninterrupted one would.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -667,20 +658,6 @@ pub fn phase_params(prep: &Prepared, frame: u32, stats: &RunStats) -> SimParams 
     params
 }
 
-/// The free particles' mass-weighted RMS displacement over the frame, per second:
-/// √(Σ mᵢ|Δxᵢ|² / Σ mᵢ) / frame length. Over a whole frame, not the last substep's velocity:
-/// on cloth at rest that velocity is mostly the sweeps' jitter (a 3 cm shirt at rest: 7.8 mm/s
-/// from the velocities, 4.1 mm/s over a frame, 1.1 mm/s over a second).
-fn frame_speed(prep: &Prepared, before: &[Vec4], after: &[Vec4]) -> f64 {
-    let model = &prep.model;
-    let sum: f64 = (before.iter().zip(after))
-        .zip(model.masses.iter().zip(&model.pinned))
-        .filter(|(_, (_, pinned))| !**pinned)
-        .map(|((a, b), (m, _))| *m as f64 * (b.truncate() - a.truncate()).length_squared() as f64)
-        .sum();
-    (sum / prep.free_mass.max(f64::MIN_POSITIVE)).sqrt() / prep.frame_dt as f64
-}
-
 /// What happens once frame `frame` is done: attachments let go, and the settle rule. Returns
 /// whether the run has settled.
 fn after_frame(
@@ -694,20 +671,6 @@ fn after_frame(
         release(prep, solver, state)?;
         stats.released_after_frame = Some(frame);
     }
-    // A cloth at rest while it is still being sewn or held has not settled.
-    let loaded = frame > prep.gravity.1 && frame > prep.attach_frames;
-    // A run continued from a coarse start has no speed until the full mesh has run a frame.
-    if let (Some(threshold), Some(rms_speed), true) =
-        (prep.settle_speed, stats.frame_speed_m_s, loaded)
-    {
-        if rms_speed < threshold as f64 {
-            stats.settled = Some(Settled {
-                frame,
-                rule: "rms_speed".into(),
-                rms_speed_m_s: rms_speed,
-            });
-            return Ok(true);
-        }
-    }
-    Ok(false)
+    stats.settled = settle::check(prep, stats, frame);
+    Ok(stats.settled.is_some())
 }
