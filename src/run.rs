@@ -511,7 +511,7 @@ fn coarse_start(
     let mut stats = RunStats::default();
     simulate(&prep, solver.as_mut(), &mut stats, |_, _| Ok(())).map_err(|e| match e {
         Error::Unstable(m) => Error::Unstable(format!(
-            "the coarse start (coarse_start_distance_m = {distance}): {m}"
+            "the coarse start (coarse_start_distance_m = {distance:.3}): {m}"
         )),
         e => e,
     })?;
