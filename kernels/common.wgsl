@@ -31,7 +31,7 @@ struct SimParams {
     strain_iterations: u32,      // Jacobi iterations of strain_limit per substep
     tolerance: f32,              // 1, implicit Euler stops sweeping once the largest step falls below tolerance × the first (0: never)
     num_bodies: u32,             // collision bodies in `bodies`
-    _pad0: u32,
+    smoothing: u32,              // implicit Euler with coarse levels: fine sweeps around each coarse correction
     bodies: array<BodyParams, MAX_BODIES>,
 }
 
@@ -88,7 +88,7 @@ struct Hinge {
     v: vec4<u32>,
     stiffness: f32,              // N·m
     rest_sin_half: f32,          // sin(θ0 / 2)
-    _pad0: u32,
+    rest_weight: f32,            // N·m, k·|E|²/(|N1| + |N2|) of the rest shape (implicit Euler's bending energy)
     _pad1: u32,
 }
 
@@ -121,7 +121,7 @@ fn unpack_spring(t: vec4<u32>) -> SpringRef {
 }
 
 fn unpack_hinge(a: vec4<u32>, b: vec4<u32>) -> Hinge {
-    return Hinge(a, bitcast<f32>(b.x), bitcast<f32>(b.y), b.z, b.w);
+    return Hinge(a, bitcast<f32>(b.x), bitcast<f32>(b.y), bitcast<f32>(b.z), b.w);
 }
 
 fn unpack_seam(a: vec4<u32>, b: vec4<u32>) -> Seam {

@@ -2,7 +2,7 @@
 //! model needs (unique edges, the vertices opposite each edge, per-vertex area shares).
 
 use crate::error::InputError;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::path::Path;
 
 /// An indexed triangle mesh in metres.
@@ -266,5 +266,43 @@ mod tests {
         let interior = edges.iter().filter(|e| e.opposite[1].is_some()).count();
         // Interior edges = (3F - boundary)/2, boundary = 2(4+2) = 12.
         assert_eq!(interior, (3 * 16 - 12) / 2);
+    }
+}
+
+/// A triangle mesh with 2D chart coordinates: a garment's panels in pattern space, or a grid
+/// in its plane. Two meshings of the same charts can exchange values through them.
+#[derive(Clone, Debug, Default)]
+pub struct Charted {
+    /// Each particle's 2D chart coordinate, in m.
+    pub uv: Vec<Vec2>,
+    /// The triangles.
+    pub triangles: Vec<[u32; 3]>,
+    /// The chart (panel) of each triangle.
+    pub triangle_chart: Vec<u32>,
+    /// Number of charts.
+    pub charts: usize,
+}
+
+impl Charted {
+    /// A `columns` × `rows` grid of `width` × `height` m as `TriMesh::grid` builds it (the
+    /// same particle order and triangles), in its own plane.
+    pub fn grid(width: f32, height: f32, columns: u32, rows: u32) -> Charted {
+        let mesh = TriMesh::grid(width, height, columns, rows, Vec3::ZERO, GridPlane::Xy);
+        Charted {
+            uv: mesh.positions.iter().map(|p| p.truncate()).collect(),
+            triangle_chart: vec![0; mesh.triangles.len()],
+            triangles: mesh.triangles,
+            charts: 1,
+        }
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.uv.len()
+    }
+
+    /// Whether the mesh has no particles.
+    pub fn is_empty(&self) -> bool {
+        self.uv.is_empty()
     }
 }

@@ -56,6 +56,13 @@ pub struct Summary {
     /// the largest Newton step of the last sweep over that of the first sweep (steps under
     /// 1 µm count as 1 µm), i.e. how much of the step's correction the sweeps left undone.
     pub max_residual: Option<f32>,
+    /// The force residual |fᵢ|/(mᵢ·g) of the free particles at the end of the last frame's
+    /// solve, largest over particles (implicit only): how far from balanced the solved step
+    /// left the forces, in units of each particle's weight (at contacts the body's normal
+    /// reaction is left out).
+    pub force_residual_max: Option<f32>,
+    /// Its root mean square over the free particles.
+    pub force_residual_rms: Option<f32>,
     /// Simulated time in s (with a coarse start, its frames too).
     pub simulated_seconds: f64,
     /// Wall time of stepping and readback in s (setup and file writing excluded; with a

@@ -406,6 +406,8 @@ fn run_scene_from(
         }),
         colors: prep.colors,
         max_residual: stats.max_residual,
+        force_residual_max: stats.force_residual.map(|r| r.0),
+        force_residual_rms: stats.force_residual.map(|r| r.1),
         simulated_seconds: substeps_run * prep.params.dt as f64,
         wall_seconds: stats.wall_seconds,
         particle_substeps_per_second: {

@@ -73,29 +73,21 @@ pub struct SolveProgress {
     pub relative_residual: f32,
     /// Iterations (sweeps over every colour) run since the previous report.
     pub iterations: u64,
+    /// The last substep's force residual |f|/(m·g) over the free particles at its end:
+    /// largest and RMS.
+    pub force_residual: (f32, f32),
 }
 
-/// Whether implicit Euler skips iteration `k` of a substep, given the largest Newton step of
-/// each earlier iteration (`steps`, m): with a tolerance, once an iteration's largest step is
-/// within `tolerance` of the first iteration's, or under `VBD_STEP_FLOOR`. The kernels and the
-/// CPU twin apply the same rule before each sweep.
-pub fn converged_before(steps: &[f32], k: usize, tolerance: f32) -> bool {
-    k >= 1 && tolerance > 0.0 && steps[k - 1] <= (tolerance * steps[0]).max(VBD_STEP_FLOOR)
-}
-
-/// The relative residual of a substep from the largest Newton step of each iteration: that of
-/// the last iteration run over that of the first (a step under `VBD_STEP_FLOOR` counts as the
-/// floor, so a cloth at rest reads ≈ 0, not 0/0). The Newton step is the residual force
-/// preconditioned by each vertex's Hessian, so it is in metres whatever the stiffness: the
-/// force itself is dominated by stiff contact, which a sweep corrects by micrometres.
-pub fn relative_residual(steps: &[f32], tolerance: f32) -> f32 {
-    let run = (1..steps.len())
-        .find(|&k| converged_before(steps, k, tolerance))
-        .unwrap_or(steps.len());
-    if run == 0 {
+/// The relative residual of a substep from the largest Newton step of each sweep: that of the
+/// last sweep run over that of the first (a step under `VBD_STEP_FLOOR` counts as the floor,
+/// so a cloth at rest reads ≈ 0, not 0/0). The Newton step is the residual force
+/// preconditioned by each vertex's Hessian, so it is in metres whatever the stiffness. Sweeps
+/// a converged substep skipped record nothing and do not count.
+pub fn relative_residual(steps: &[f32]) -> f32 {
+    let Some(last) = steps.iter().rposition(|&s| s > 0.0) else {
         return 0.0;
-    }
-    steps[run - 1] / steps[0].max(VBD_STEP_FLOOR)
+    };
+    steps[last].max(VBD_STEP_FLOOR) / steps[0].max(VBD_STEP_FLOOR)
 }
 
 /// One workgroup's (or block's) share of a frame's health.

@@ -58,7 +58,7 @@ fn sim_params_layout() {
             ),
             ("tolerance", offset_of!(SimParams, tolerance)),
             ("num_bodies", offset_of!(SimParams, num_bodies)),
-            ("_pad0", offset_of!(SimParams, _pad0)),
+            ("smoothing", offset_of!(SimParams, smoothing)),
             ("bodies", offset_of!(SimParams, bodies)),
         ],
     );
@@ -157,7 +157,7 @@ fn hinge_layout() {
             ("v", offset_of!(Hinge, v)),
             ("stiffness", offset_of!(Hinge, stiffness)),
             ("rest_sin_half", offset_of!(Hinge, rest_sin_half)),
-            ("_pad0", offset_of!(Hinge, _pad0)),
+            ("rest_weight", offset_of!(Hinge, rest_weight)),
             ("_pad1", offset_of!(Hinge, _pad1)),
         ],
     );

@@ -98,6 +98,7 @@ pub fn model(dim: u32) -> ClothModel {
         triangles,
         springs,
         hinges: Vec::new(),
+        multigrid: None,
         seams: Vec::new(),
         colliders: Vec::new(),
     }

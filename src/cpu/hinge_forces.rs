@@ -53,55 +53,44 @@ impl HingeFrame {
 #[inline]
 pub fn hinge_frame(pos: &[Vec4], h: &Hinge) -> Option<HingeFrame> {
     let p = |i: u32| Vec3A::from_vec4(pos[i as usize]);
-    let (x3, x4, x1, x2) = (p(h.v[0]), p(h.v[1]), p(h.v[2]), p(h.v[3]));
-    let e = x4 - x3;
-    let n1 = (x1 - x3).cross(x1 - x4);
-    let n2 = (x2 - x4).cross(x2 - x3);
-    let e_len = e.length();
-    let n1_sq = n1.dot(n1);
-    let n2_sq = n2.dot(n2);
-    // Degenerate triangles have no defined angle; they get no bending force.
-    if e_len < 1e-12 || n1_sq < 1e-24 || n2_sq < 1e-24 {
-        return None;
-    }
-    let n1_len = n1_sq.sqrt();
-    let n2_len = n2_sq.sqrt();
-    let n1_hat = n1 / n1_len;
-    let n2_hat = n2 / n2_len;
-    let cos_theta = n1_hat.dot(n2_hat).clamp(-1.0, 1.0);
-    let mut sin_half = (0.5 * (1.0 - cos_theta)).max(0.0).sqrt();
-    if n1_hat.cross(n2_hat).dot(e) < 0.0 {
-        sin_half = -sin_half;
-    }
-    Some(HingeFrame {
-        x: [x3, x4, x1, x2],
-        e_hat: e / e_len,
-        e_len,
-        a: n1 / n1_sq,
-        b: n2 / n2_sq,
-        weight: h.stiffness * e_len * e_len / (n1_len + n2_len),
-        sin_half,
-    })
+    HingeFrame::at([p(h.v[0]), p(h.v[1]), p(h.v[2]), p(h.v[3])], h.stiffness)
 }
 
-/// What a hinge's force on one vertex is made of (for `vbd_solve`, which also needs its
-/// Hessian): f = weight · (sin(θ/2) − sin(θ0/2)) · u.
-pub struct HingeGeometry {
-    /// k·|E|²/(|N1| + |N2|), in N·m.
-    pub weight: f32,
-    /// sin(θ/2) of the signed dihedral angle.
-    pub sin_half: f32,
-    /// The vertex's direction, in 1/m.
-    pub u: Vec3,
-}
-
-/// The hinge's weight, angle and direction at vertex `role`; `None` for a degenerate hinge.
-pub fn hinge_geometry(pos: &[Vec4], h: &Hinge, role: u32) -> Option<HingeGeometry> {
-    hinge_frame(pos, h).map(|t| HingeGeometry {
-        weight: t.weight,
-        sin_half: t.sin_half,
-        u: t.direction(role),
-    })
+impl HingeFrame {
+    /// The frame of a hinge of `stiffness` with shared edge x3→x4 and opposite vertices x1, x2
+    /// (`[x3, x4, x1, x2]`, the order of `Hinge::v`); `None` for a degenerate hinge.
+    #[inline]
+    pub fn at(x: [Vec3A; 4], stiffness: f32) -> Option<HingeFrame> {
+        let [x3, x4, x1, x2] = x;
+        let e = x4 - x3;
+        let n1 = (x1 - x3).cross(x1 - x4);
+        let n2 = (x2 - x4).cross(x2 - x3);
+        let e_len = e.length();
+        let n1_sq = n1.dot(n1);
+        let n2_sq = n2.dot(n2);
+        // Degenerate triangles have no defined angle; they get no bending force.
+        if e_len < 1e-12 || n1_sq < 1e-24 || n2_sq < 1e-24 {
+            return None;
+        }
+        let n1_len = n1_sq.sqrt();
+        let n2_len = n2_sq.sqrt();
+        let n1_hat = n1 / n1_len;
+        let n2_hat = n2 / n2_len;
+        let cos_theta = n1_hat.dot(n2_hat).clamp(-1.0, 1.0);
+        let mut sin_half = (0.5 * (1.0 - cos_theta)).max(0.0).sqrt();
+        if n1_hat.cross(n2_hat).dot(e) < 0.0 {
+            sin_half = -sin_half;
+        }
+        Some(HingeFrame {
+            x,
+            e_hat: e / e_len,
+            e_len,
+            a: n1 / n1_sq,
+            b: n2 / n2_sq,
+            weight: stiffness * e_len * e_len / (n1_len + n2_len),
+            sin_half,
+        })
+    }
 }
 
 /// Evaluates every hinge once and writes its forces on its four vertices to

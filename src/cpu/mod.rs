@@ -7,17 +7,28 @@
 //! on the caller's rayon pool (`--threads`). The spatial-hash build (a scatter) and the
 //! point–triangle self-collision reference (Gauss–Seidel) stay serial.
 
+mod assemble;
 mod bending_forces;
+mod coarse_operator;
 mod collide_body;
+mod contact_planes;
+mod force_residual;
 mod hash_clear;
 mod hash_count;
 mod hash_fill;
 mod hash_scan;
 mod hinge_forces;
+mod implicit;
+mod implicit_terms;
 mod integrate;
+mod line_energy;
 mod monitor;
+mod pcg;
+mod prolong;
+mod restrict;
 mod seam_forces;
 mod self_collide;
+mod smooth;
 mod spring_forces;
 mod strain_limit;
 mod vbd_finish;
@@ -25,30 +36,41 @@ mod vbd_init;
 mod vbd_solve;
 mod wind_forces;
 
+pub use assemble::assemble;
 pub use bending_forces::bending_forces;
+pub use coarse_operator::coarse_operator;
 pub use collide_body::{
     collide_body, collide_edge, collide_edges, collide_particle, to_body_frame,
 };
+pub use contact_planes::contact_planes;
+pub use force_residual::{force_residual, reduce_residual, residual_gravity};
 pub use hash_clear::hash_clear;
 pub use hash_count::{hash_bucket, hash_cell_of, hash_count};
 pub use hash_fill::hash_fill;
 pub use hash_scan::hash_scan;
 pub use hinge_forces::{hinge_force, hinge_forces, hinge_frame, HingeFrame};
+pub use implicit::{Elements, LevelArrays, Newton, Vbd};
+pub use implicit_terms::{hinge_psi, Implicit, VbdElements, VertexSystem, CONTACT_RATIO};
 pub use integrate::{integrate, HingeGather};
+pub use line_energy::{apply_correction, line_energy, line_search, tree_sum, LINE_ALPHAS};
 pub use monitor::monitor;
+pub use pcg::{dot, pcg_direction, pcg_matvec, pcg_start, pcg_step, PcgScalars};
+pub use prolong::{correction_filter, prolong};
+pub use restrict::restrict;
 pub use seam_forces::{rest_gap, seam_force, seam_forces};
 pub use self_collide::{point_triangle_impulses, self_collide};
+pub use smooth::{level_residual, smooth};
 pub use spring_forces::spring_forces;
 pub use strain_limit::strain_limit;
 pub use vbd_finish::vbd_finish;
 pub use vbd_init::vbd_init;
-pub use vbd_solve::{newton_step, solve3, vbd_solve, vertex_system, VbdElements};
+pub use vbd_solve::{newton_step, solve3, vbd_solve};
 pub use wind_forces::wind_forces;
 
 use crate::error::Error;
-use crate::model::layout::{BodyParams, Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep};
+use crate::model::layout::{BodyParams, Hinge, Seam, SimParams, SpringRef, SubstepParams};
 use crate::model::{ClothModel, Csr};
-use crate::plan::{HingeEvaluation, Pass, PassPlan};
+use crate::plan::{implicit_schedule, HingeEvaluation, Pass, PassPlan, SolveShape};
 use crate::solver::{relative_residual, AdapterReport, ParticleState, SolveProgress, Solver};
 use glam::Vec4;
 
@@ -92,25 +114,6 @@ struct Hinges {
     hinges: Vec<Hinge>,
     csr: Csr<u32>,
     forces: Vec<Vec4>,
-}
-
-/// Vertex Block Descent: the elements, the colour order and sweeps, and the solve's arrays.
-pub struct Vbd {
-    springs: Csr<SpringRef>,
-    hinges: Option<(Vec<Hinge>, Csr<u32>)>,
-    seams: Option<(Vec<Seam>, Csr<u32>)>,
-    /// Vertices sorted by colour.
-    pub order: Vec<u32>,
-    /// Every colour `iterations` times.
-    pub sweeps: Vec<Sweep>,
-    /// The iterate.
-    pub x: Vec<Vec4>,
-    /// The inertial target.
-    pub y: Vec<Vec4>,
-    /// The largest Newton step of each iteration of the last substep, in m.
-    pub steps: Vec<f32>,
-    /// Iterations run, in all; and as many as were last reported.
-    iterations_run: (u64, u64),
 }
 
 /// The self-collision hash table and the mesh neighbours it skips.
@@ -195,20 +198,8 @@ impl CpuSolver {
                 .contains(Pass::StrainLimit)
                 .then(|| (model.spring_csr(), vec![Vec4::ZERO; n], vec![Vec4::ZERO; n])),
             vbd: plan.contains(Pass::VbdSolve).then(|| {
-                let coloring = model.vertex_coloring();
-                Vbd {
-                    springs: model.spring_csr(),
-                    hinges: (!model.hinges.is_empty())
-                        .then(|| (model.hinges.clone(), model.hinge_csr())),
-                    seams: (!model.seams.is_empty())
-                        .then(|| (model.seams.clone(), model.seam_csr())),
-                    sweeps: coloring.sweeps(params.iterations),
-                    order: coloring.order,
-                    x: vec![Vec4::ZERO; n],
-                    y: vec![Vec4::ZERO; n],
-                    steps: vec![0.0; params.iterations as usize],
-                    iterations_run: (0, 0),
-                }
+                let shape = SolveShape::for_run(model, &params, plan);
+                Vbd::new(model, &params, implicit_schedule(shape))
             }),
         }
     }
@@ -344,33 +335,7 @@ impl CpuSolver {
             Pass::VbdSolve => {
                 let v = self.vbd.as_mut().expect("vbd_solve is not in the plan");
                 let sdfs: Vec<&[f32]> = self.colliders.iter().map(|c| &c.sdf.values[..]).collect();
-                let el = VbdElements {
-                    springs: (&v.springs.offsets, &v.springs.items),
-                    hinges: v
-                        .hinges
-                        .as_ref()
-                        .map(|(h, c)| (&c.offsets[..], &c.items[..], &h[..])),
-                    seams: v
-                        .seams
-                        .as_ref()
-                        .map(|(s, c)| (&c.offsets[..], &c.items[..], &s[..])),
-                    sdfs: &sdfs,
-                };
-                for sweep in &v.sweeps {
-                    let ran = vbd_solve(
-                        p,
-                        step,
-                        sweep,
-                        &v.order,
-                        &self.pos,
-                        &v.y,
-                        &mut v.x,
-                        &mut v.steps,
-                        &el,
-                    );
-                    // An iteration counts once, at its first colour.
-                    v.iterations_run.0 += (ran && sweep.first == 0) as u64;
-                }
+                v.solve(p, step, &self.pos, &sdfs);
             }
             Pass::VbdFinish => {
                 let v = self.vbd.as_ref().expect("vbd_finish is not in the plan");
@@ -474,12 +439,17 @@ impl Solver for CpuSolver {
         None
     }
 
+    /// Runs the substeps on a worker of the rayon pool: the stages' parallel loops then
+    /// split work by stealing within the pool instead of each waking the pool from outside
+    /// (thousands of small loops a frame in implicit Euler's solve).
     fn advance(&mut self, steps: &[SubstepParams]) -> Result<(), Error> {
-        for step in steps {
-            for i in 0..self.plan.passes.len() {
-                self.run_pass(self.plan.passes[i], step);
+        rayon::scope(|_| {
+            for step in steps {
+                for i in 0..self.plan.passes.len() {
+                    self.run_pass(self.plan.passes[i], step);
+                }
             }
-        }
+        });
         Ok(())
     }
 
@@ -494,13 +464,13 @@ impl Solver for CpuSolver {
     }
 
     fn residual(&mut self) -> Result<Option<SolveProgress>, Error> {
-        let tolerance = self.params.tolerance;
         Ok(self.vbd.as_mut().map(|v| {
             let (run, reported) = v.iterations_run;
             v.iterations_run.1 = run;
             SolveProgress {
-                relative_residual: relative_residual(&v.steps, tolerance),
+                relative_residual: relative_residual(&v.steps),
                 iterations: run - reported,
+                force_residual: v.residual,
             }
         }))
     }

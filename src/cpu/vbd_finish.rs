@@ -4,7 +4,7 @@ use crate::model::layout::SimParams;
 use glam::Vec4;
 use rayon::prelude::*;
 
-/// The next state from the solved positions: x_{n+1} = x, v_{n+1} = (x − xₙ)/h. Pinned
+/// The next state from the solved displacements D: x_{n+1} = xₙ + D, v_{n+1} = D/h. Pinned
 /// particles keep their position and have zero velocity. Particles run in parallel.
 pub fn vbd_finish(params: &SimParams, x: &[Vec4], pos: &mut [Vec4], vel: &mut [Vec4]) {
     let h = params.dt;
@@ -19,8 +19,8 @@ pub fn vbd_finish(params: &SimParams, x: &[Vec4], pos: &mut [Vec4], vel: &mut [V
                 *vel = Vec4::ZERO;
                 return;
             }
-            let next = x[i].truncate();
-            *vel = ((next - p.truncate()) / h).extend(0.0);
-            *pos = next.extend(p.w);
+            let d = x[i].truncate();
+            *vel = (d / h).extend(0.0);
+            *pos = (p.truncate() + d).extend(p.w);
         });
 }

@@ -599,7 +599,8 @@ impl Solver for GpuSolver {
         let iterations = count[0].wrapping_sub(v.iterations_reported);
         v.iterations_reported = count[0];
         Ok(Some(crate::solver::SolveProgress {
-            relative_residual: crate::solver::relative_residual(&steps, self.tolerance),
+            relative_residual: crate::solver::relative_residual(&steps),
+            force_residual: (0.0, 0.0),
             iterations: iterations as u64,
         }))
     }

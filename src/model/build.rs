@@ -202,14 +202,25 @@ impl Scene {
                 }
                 fold_of[stitch] = angle;
             }
-            // Hinges across seams bend like the fabric and rest at the seam's fold angle.
+            // Hinges across seams bend like the fabric and rest at the seam's fold angle. The
+            // panels lie apart until sewn, so the rest weight takes the first panel's triangle
+            // for both sides (the mesh spacing is the same on both).
             if let Some(kb) = self.fabric.bending_stiffness {
-                model.hinges.extend(g.seam_hinges.iter().map(|h| Hinge {
-                    v: h.v,
-                    stiffness: kb,
-                    rest_sin_half: (0.5 * fold_of[h.stitch as usize]).sin(),
-                    _pad0: 0,
-                    _pad1: 0,
+                model.hinges.extend(g.seam_hinges.iter().map(|h| {
+                    let p = |i: u32| model.positions[i as usize];
+                    let [x3, x4, x1] = [h.v[0], h.v[1], h.v[2]].map(p);
+                    let n1 = (x1 - x3).cross(x1 - x4).length();
+                    Hinge {
+                        v: h.v,
+                        stiffness: kb,
+                        rest_sin_half: (0.5 * fold_of[h.stitch as usize]).sin(),
+                        rest_weight: if n1 > 0.0 {
+                            kb * (x4 - x3).length_squared() / (2.0 * n1)
+                        } else {
+                            0.0
+                        },
+                        _pad1: 0,
+                    }
                 }));
             }
             model.seams = g
@@ -238,6 +249,9 @@ impl Scene {
                 })
                 .collect();
         }
+        model.multigrid = self
+            .build_multigrid(&model, garment.as_ref())
+            .map(std::sync::Arc::new);
         Ok(BuiltCloth {
             model,
             garment,

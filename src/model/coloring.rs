@@ -68,45 +68,64 @@ impl ClothModel {
             clique(&s.v[..3]);
         }
         let adjacency = super::Csr::from_pairs(n, &pairs);
-        let mut color_of = vec![u32::MAX; n];
-        // `seen[c] == v` marks colour c as taken by a neighbour of v.
-        let mut seen: Vec<usize> = Vec::new();
-        for v in 0..n {
-            let (start, end) = (adjacency.offsets[v], adjacency.offsets[v + 1]);
-            for &w in &adjacency.items[start as usize..end as usize] {
-                let c = color_of[w as usize];
-                if c != u32::MAX {
-                    if seen.len() <= c as usize {
-                        seen.resize(c as usize + 1, usize::MAX);
-                    }
-                    seen[c as usize] = v;
-                }
-            }
-            let c = (0..)
-                .find(|&c| seen.get(c).is_none_or(|&s| s != v))
-                .unwrap_or(0);
-            color_of[v] = c as u32;
-        }
-        let colors = color_of.iter().map(|&c| c as usize + 1).max().unwrap_or(0);
-        let mut offsets = vec![0u32; colors + 1];
-        for &c in &color_of {
-            offsets[c as usize + 1] += 1;
-        }
-        for c in 0..colors {
-            offsets[c + 1] += offsets[c];
-        }
-        let mut cursor = offsets.clone();
-        let mut order = vec![0u32; n];
-        for (v, &c) in color_of.iter().enumerate() {
-            order[cursor[c as usize] as usize] = v as u32;
-            cursor[c as usize] += 1;
-        }
+        let color_of = greedy_colors(n, &adjacency.offsets, &adjacency.items);
+        let (order, offsets) = sort_by_color(&color_of);
         Coloring {
             color_of,
             order,
             offsets,
         }
     }
+}
+
+/// Each vertex's colour: the smallest none of its lower-indexed neighbours has (neighbours of
+/// v: `neighbours[offsets[v]..offsets[v + 1]]`; v itself may be among them).
+fn greedy_colors(n: usize, offsets: &[u32], neighbours: &[u32]) -> Vec<u32> {
+    let mut color_of = vec![u32::MAX; n];
+    // `seen[c] == v` marks colour c as taken by a neighbour of v.
+    let mut seen: Vec<usize> = Vec::new();
+    for v in 0..n {
+        let (start, end) = (offsets[v], offsets[v + 1]);
+        for &w in &neighbours[start as usize..end as usize] {
+            let c = color_of[w as usize];
+            if c != u32::MAX && w as usize != v {
+                if seen.len() <= c as usize {
+                    seen.resize(c as usize + 1, usize::MAX);
+                }
+                seen[c as usize] = v;
+            }
+        }
+        let c = (0..)
+            .find(|&c| seen.get(c).is_none_or(|&s| s != v))
+            .unwrap_or(0);
+        color_of[v] = c as u32;
+    }
+    color_of
+}
+
+/// Vertices sorted by (colour, index), and the `colours + 1` offsets of each colour.
+fn sort_by_color(color_of: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    let colors = color_of.iter().map(|&c| c as usize + 1).max().unwrap_or(0);
+    let mut offsets = vec![0u32; colors + 1];
+    for &c in color_of {
+        offsets[c as usize + 1] += 1;
+    }
+    for c in 0..colors {
+        offsets[c + 1] += offsets[c];
+    }
+    let mut cursor = offsets.clone();
+    let mut order = vec![0u32; color_of.len()];
+    for (v, &c) in color_of.iter().enumerate() {
+        order[cursor[c as usize] as usize] = v as u32;
+        cursor[c as usize] += 1;
+    }
+    (order, offsets)
+}
+
+/// A greedy colouring of a block-sparse matrix's graph (rows joined by a block): the rows by
+/// colour and the colours' offsets, as `Coloring::order` and `Coloring::offsets`.
+pub(super) fn greedy_coloring(n: usize, offsets: &[u32], columns: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    sort_by_color(&greedy_colors(n, offsets, columns))
 }
 
 #[cfg(test)]

@@ -40,8 +40,9 @@ pub struct SimParams {
     pub tolerance: f32,
     /// Bodies in `bodies` (the rest are zero).
     pub num_bodies: u32,
-    /// Padding to the array's 16-byte alignment.
-    pub _pad0: u32,
+    /// Implicit Euler with coarse levels: fine sweeps before each coarse correction and after
+    /// the last one.
+    pub smoothing: u32,
     /// Each collision body's SDF and contact response.
     pub bodies: [BodyParams; MAX_BODIES],
 }
@@ -136,8 +137,10 @@ pub struct Hinge {
     pub stiffness: f32,
     /// sin(θ0/2) of the rest angle θ0.
     pub rest_sin_half: f32,
-    /// Padding.
-    pub _pad0: u32,
+    /// k·|E|²/(|N1| + |N2|) of the rest shape, in N·m: implicit Euler's bending energy is
+    /// this weight times ψ(θ) = −2·cos(θ/2) − sin(θ0/2)·θ, a potential whose gradient is the
+    /// hinge force (`cpu::hinge_energy`).
+    pub rest_weight: f32,
     /// Padding.
     pub _pad1: u32,
 }

@@ -7,6 +7,8 @@ mod build;
 mod collider;
 mod coloring;
 pub mod layout;
+mod levels;
+pub mod multigrid;
 
 pub use build::BuiltCloth;
 pub use collider::build_body;
@@ -51,6 +53,9 @@ pub struct ClothModel {
     pub seams: Vec<Seam>,
     /// The collision bodies, in scene order.
     pub colliders: Vec<std::sync::Arc<crate::body::Collider>>,
+    /// The coarse levels of implicit Euler's multigrid solve (`None`: plain Vertex Block
+    /// Descent).
+    pub multigrid: Option<std::sync::Arc<multigrid::Multigrid>>,
 }
 
 /// A compressed-sparse-row incidence list: `items[offsets[i]..offsets[i + 1]]` belong to particle i.
@@ -94,6 +99,17 @@ pub fn hinge_sin_half(x3: Vec3, x4: Vec3, x1: Vec3, x2: Vec3) -> f32 {
     } else {
         s
     }
+}
+
+/// k·|E|²/(|N1| + |N2|) of a hinge with shared edge x3→x4 and opposite vertices x1, x2 (as
+/// `hinge_forces` weighs it), in N·m; 0 for a degenerate hinge.
+pub fn hinge_weight(stiffness: f32, x3: Vec3, x4: Vec3, x1: Vec3, x2: Vec3) -> f32 {
+    let n1 = (x1 - x3).cross(x1 - x4).length();
+    let n2 = (x2 - x4).cross(x2 - x3).length();
+    if n1 + n2 <= 0.0 {
+        return 0.0;
+    }
+    stiffness * (x4 - x3).length_squared() / (n1 + n2)
 }
 
 impl ClothModel {
@@ -142,7 +158,7 @@ impl ClothModel {
                     v: [a, b, o1, o2],
                     stiffness: kb,
                     rest_sin_half: hinge_sin_half(p(a), p(b), p(o1), p(o2)),
-                    _pad0: 0,
+                    rest_weight: hinge_weight(kb, p(a), p(b), p(o1), p(o2)),
                     _pad1: 0,
                 });
             }
@@ -157,6 +173,7 @@ impl ClothModel {
             hinges,
             seams: Vec::new(),
             colliders: Vec::new(),
+            multigrid: None,
         }
     }
 

@@ -74,6 +74,16 @@ pub struct Garment {
 }
 
 impl Garment {
+    /// The garment's panels in pattern coordinates, one chart per panel.
+    pub fn charted(&self) -> crate::mesh::Charted {
+        crate::mesh::Charted {
+            uv: self.uv.clone(),
+            triangles: self.mesh.triangles.clone(),
+            triangle_chart: self.triangle_panel.clone(),
+            charts: self.panel_names.len(),
+        }
+    }
+
     /// The particles on edges labelled with any of `labels`, sorted and unique.
     pub fn particles_on_labelled_edges(&self, labels: &[String]) -> Vec<u32> {
         let mut ids: Vec<u32> = (self.edge_labels.iter().zip(&self.edge_particles))

@@ -4,6 +4,7 @@
 //! reproduces any field that is affine over a source triangle exactly.
 
 use super::garment::Garment;
+pub use crate::mesh::Charted;
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -22,23 +23,27 @@ impl Transfer {
     /// Locates each particle of `target` in `source`, which must be the same pattern meshed
     /// at another spacing (the same panels, in the same order).
     pub fn new(source: &Garment, target: &Garment) -> Transfer {
-        let target_panel = particle_panels(target);
-        // The source triangles of each panel, with their pattern corners.
-        let mut by_panel: Vec<Vec<([u32; 3], [Vec2; 3])>> =
-            vec![Vec::new(); source.panel_names.len()];
-        for (t, &p) in source.mesh.triangles.iter().zip(&source.triangle_panel) {
+        Transfer::between(&source.charted(), &target.charted())
+    }
+
+    /// Locates each particle of `target` in a triangle of the same chart of `source`.
+    pub fn between(source: &Charted, target: &Charted) -> Transfer {
+        let target_chart = particle_charts(target);
+        // The source triangles of each chart, with their chart corners.
+        let mut by_chart: Vec<Vec<([u32; 3], [Vec2; 3])>> = vec![Vec::new(); source.charts];
+        for (t, &p) in source.triangles.iter().zip(&source.triangle_chart) {
             let uv = t.map(|i| source.uv[i as usize]);
-            by_panel[p as usize].push((*t, uv));
+            by_chart[p as usize].push((*t, uv));
         }
         let corners: Vec<(([u32; 3], Vec3), f32)> = (0..target.uv.len())
             .into_par_iter()
             .map(|i| {
                 let uv = target.uv[i];
-                // A particle in no triangle (none in a meshed pattern) searches every panel.
-                let own = target_panel[i].map(|p| &by_panel[p as usize][..]);
+                // A particle in no triangle (none in a meshed pattern) searches every chart.
+                let own = target_chart[i].and_then(|p| by_chart.get(p as usize));
                 let candidates: Vec<&([u32; 3], [Vec2; 3])> = match own {
                     Some(tris) if !tris.is_empty() => tris.iter().collect(),
-                    _ => by_panel.iter().flatten().collect(),
+                    _ => by_chart.iter().flatten().collect(),
                 };
                 let mut best = ([0u32; 3], Vec3::X, f32::INFINITY);
                 for (t, c) in candidates {
@@ -68,17 +73,22 @@ impl Transfer {
             })
             .collect()
     }
+
+    /// Each target particle's source triangle and the weights of its corners.
+    pub fn corners(&self) -> &[([u32; 3], Vec3)] {
+        &self.corners
+    }
 }
 
-/// Each particle's panel: the panel of any triangle that uses it (`None` for none).
-fn particle_panels(g: &Garment) -> Vec<Option<u32>> {
-    let mut panel = vec![None; g.uv.len()];
-    for (t, &p) in g.mesh.triangles.iter().zip(&g.triangle_panel) {
+/// Each particle's chart: the chart of any triangle that uses it (`None` for none).
+fn particle_charts(g: &Charted) -> Vec<Option<u32>> {
+    let mut chart = vec![None; g.uv.len()];
+    for (t, &p) in g.triangles.iter().zip(&g.triangle_chart) {
         for &i in t {
-            panel[i as usize].get_or_insert(p);
+            chart[i as usize].get_or_insert(p);
         }
     }
-    panel
+    chart
 }
 
 /// The barycentric weights of the point of triangle `c` closest to `p`, and its distance.

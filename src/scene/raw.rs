@@ -197,6 +197,8 @@ pub(super) struct RawSolver {
     #[serde(default = "default_iterations")]
     pub(super) iterations: i64,
     pub(super) tolerance: Option<f64>,
+    pub(super) multigrid: Option<bool>,
+    pub(super) smoothing_sweeps: Option<i64>,
     pub(super) settle_speed_m_s: Option<f64>,
     /// Replaced by `settle_speed_m_s`; read only to say so.
     pub(super) settle_ke_per_particle_j: Option<f64>,

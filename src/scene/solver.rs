@@ -25,9 +25,14 @@ pub struct SolverSettings {
     pub integrator: u32,
     /// Vertex Block Descent sweeps per substep (implicit only); with a tolerance, the most.
     pub iterations: u32,
-    /// Implicit Euler stops sweeping a substep once an iteration's largest Newton step is this
-    /// fraction of the first iteration's (`None`: always `iterations`).
+    /// Implicit Euler stops a substep's solve once the RMS force residual |f|/(m·g) of the
+    /// free particles is at most this (`None`: always `iterations`).
     pub tolerance: Option<f32>,
+    /// Implicit Euler solves with coarse levels (a multigrid cycle) where the cloth has them
+    /// (grids and sewing patterns).
+    pub multigrid: bool,
+    /// With coarse levels, fine sweeps before each coarse correction and after the last one.
+    pub smoothing_sweeps: u32,
     /// Stop once the free particles' RMS speed, √(2·kinetic energy / their mass), falls
     /// below this (m/s): the same rule at every particle spacing.
     pub settle_speed: Option<f32>,
@@ -48,6 +53,9 @@ pub struct SolverSettings {
     /// A frame with a particle faster than this (m/s) has diverged.
     pub max_speed: f32,
 }
+
+/// Fine sweeps around each coarse correction of implicit Euler's multigrid cycle.
+pub const DEFAULT_SMOOTHING_SWEEPS: u32 = 2;
 
 /// The default of `[solver] strain_limit`: 10% over rest length. Woven fabrics reach about 5%
 /// only at the 500 gf/cm load of the KES tensile test (README, "Strain limiting").
@@ -117,9 +125,25 @@ pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings,
                 "solver",
                 "tolerance",
                 v,
-                (1e-6, 0.999),
-                "(a fraction of the first sweep's largest step: 0.01 = 1%)",
+                (1e-6, 1e3),
+                "(the RMS force residual |f|/(m·g) of the free particles: 0.01 = 1% of each \
+                 particle's weight)",
             )?),
+        },
+        multigrid: match s.multigrid {
+            Some(true) if integrator != INTEGRATOR_IMPLICIT => {
+                return Err(c.err(
+                    "solver",
+                    "multigrid",
+                    "multigrid solves implicit Euler's equations; this scene's integrator has none",
+                    "remove multigrid, or use integrator = \"implicit\"",
+                ))
+            }
+            other => other.unwrap_or(true),
+        },
+        smoothing_sweeps: match s.smoothing_sweeps {
+            None => DEFAULT_SMOOTHING_SWEEPS,
+            Some(v) => c.count("solver", "smoothing_sweeps", v, 1)?,
         },
         settle_speed: match (s.settle_speed_m_s, s.settle_ke_per_particle_j) {
             (_, Some(_)) => {

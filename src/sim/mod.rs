@@ -313,7 +313,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         },
         tolerance: s.tolerance.unwrap_or(0.0),
         num_bodies: model.colliders.len() as u32,
-        _pad0: 0,
+        smoothing: s.smoothing_sweeps,
         // Friction is soft while a garment is being sewn; the run switches to each body's
         // slip speed once every seam is closed (see `phase_params`).
         bodies: bodies::body_params(&model, &scene.bodies, garment.is_some()),
@@ -429,6 +429,10 @@ pub struct RunStats {
     /// Iterations the implicit solve ran, over every substep.
     #[serde(default)]
     pub iterations_run: u64,
+    /// The implicit solve's force residual |f|/(m·g) at the end of the last frame's last
+    /// substep: largest and RMS over the free particles.
+    #[serde(default)]
+    pub force_residual: Option<(f32, f32)>,
     /// Largest spring strain at the last good frame.
     pub last_edge_strain: f32,
     /// Largest particle speed at any output frame, in m/s.
@@ -610,6 +614,7 @@ pub fn simulate_from(
             let r = p.relative_residual;
             stats.max_residual = Some(stats.max_residual.map_or(r, |m| m.max(r)));
             stats.iterations_run += p.iterations;
+            stats.force_residual = Some(p.force_residual);
         }
         stats.max_speed = stats.max_speed.max(health.max_speed);
         stats.frames_run = frame;

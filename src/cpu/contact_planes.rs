@@ -1,0 +1,74 @@
+//! CPU twin of `kernels/contact_planes.wgsl`.
+
+use super::collide_body::{sample_body_sdf, to_body_frame, to_world};
+use super::implicit_terms::{Implicit, CONTACT_SLACK_FRACTION};
+use crate::model::layout::SimParams;
+use glam::{Vec3, Vec4};
+use rayon::prelude::*;
+
+/// Linearises each body's contact at every free vertex for the step: the SDF sampled once at
+/// the starting guess xₙ + D⁰ gives a plane φ ≈ c + n̂·D (`planes[b·n + i]` = (n̂, c)), which
+/// the step's sweeps, assembly and line search all use. The plane has no rounding noise in D:
+/// its force resolves the contact's normal balance to ~1e-10 m, where the SDF sampled at
+/// world positions would move by 1.2e-7 m steps, 100 times a particle's weight at the
+/// contact's stiffness. A vertex in contact (within `CONTACT_SLACK_FRACTION` of the layer)
+/// gets friction's normal force λ from its load at the guess: the inward component of
+/// everything but contact (its weight and the pull of its springs and seams), in
+/// `lambdas[i][b]`; others get 0 and no friction this step. Far from a body (outside its
+/// grid) the plane is (0, SDF_FAR).
+pub fn contact_planes(
+    s: &Implicit,
+    guess: &[Vec4],
+    sdfs: &[&[f32]],
+    planes: &mut [Vec4],
+    lambdas: &mut [Vec4],
+) {
+    let p = s.params;
+    let n = p.num_particles as usize;
+    let bodies = p.num_bodies as usize;
+    let free_params = SimParams {
+        num_bodies: 0,
+        ..*p
+    };
+    let without_contact = Implicit {
+        params: &free_params,
+        ..*s
+    };
+    let results: Vec<([Vec4; crate::model::layout::MAX_BODIES], Vec4)> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mut out = [Vec4::ZERO; crate::model::layout::MAX_BODIES];
+            let mut lambda = Vec4::ZERO;
+            if s.prev[i].w == 0.0 {
+                return (out, lambda);
+            }
+            let d0 = guess[i].truncate();
+            let x = s.prev[i].truncate() + d0;
+            let mut load: Option<Vec3> = None;
+            for b in 0..bodies {
+                let (pose, body) = (&s.step.bodies[b], &p.bodies[b]);
+                let (xb, _) = to_body_frame(pose, x);
+                let sample = sample_body_sdf(body, sdfs[b], xb);
+                let g = to_world(pose, sample.truncate());
+                let len = g.length();
+                let normal = if len > 1e-12 { g / len } else { Vec3::ZERO };
+                out[b] = normal.extend(sample.w - normal.dot(d0));
+                if sample.w < body.thickness * (1.0 + CONTACT_SLACK_FRACTION) {
+                    let f = *load.get_or_insert_with(|| {
+                        without_contact
+                            .vertex_system(i, guess, None, &mut |_, _| {})
+                            .force
+                    });
+                    lambda[b] = (-normal.dot(f)).max(0.0);
+                }
+            }
+            (out, lambda)
+        })
+        .collect();
+    for (i, (out, lambda)) in results.into_iter().enumerate() {
+        for (b, plane) in out.iter().enumerate().take(bodies) {
+            planes[b * n + i] = *plane;
+        }
+        lambdas[i] = lambda;
+    }
+}

@@ -1,0 +1,398 @@
+//! Implicit Euler on the CPU: the solve's arrays and the executor that runs a substep's
+//! `SolveOp`s (`plan::implicit_schedule`) through the stages' CPU twins, in the order the
+//! GPU encodes them.
+
+use super::assemble::assemble;
+use super::coarse_operator::coarse_operator;
+use super::contact_planes::contact_planes;
+use super::force_residual::{force_residual, reduce_residual};
+use super::implicit_terms::{Implicit, VbdElements};
+use super::line_energy::{apply_correction, line_energy, line_search};
+use super::pcg::{pcg_direction, pcg_matvec, pcg_start, pcg_step, PcgScalars};
+use super::prolong::{correction_filter, prolong};
+use super::restrict::restrict;
+use super::smooth::{level_residual, smooth};
+use super::vbd_solve::vbd_solve;
+use crate::model::layout::{
+    Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep, WORKGROUP_SIZE,
+};
+use crate::model::multigrid::Multigrid;
+use crate::model::{ClothModel, Csr};
+use crate::plan::SolveOp;
+use glam::{Mat3, Vec4};
+use std::sync::Arc;
+
+/// The elements the solve gathers over.
+pub struct Elements {
+    springs: Csr<SpringRef>,
+    hinges: Option<(Vec<Hinge>, Csr<u32>)>,
+    seams: Option<(Vec<Seam>, Csr<u32>)>,
+}
+
+impl Elements {
+    /// The model's springs, hinges and seam pairs.
+    pub fn new(model: &ClothModel) -> Elements {
+        Elements {
+            springs: model.spring_csr(),
+            hinges: (!model.hinges.is_empty()).then(|| (model.hinges.clone(), model.hinge_csr())),
+            seams: (!model.seams.is_empty()).then(|| (model.seams.clone(), model.seam_csr())),
+        }
+    }
+
+    /// Borrowed as the stages take them.
+    pub fn view(&self) -> VbdElements<'_> {
+        VbdElements {
+            springs: (&self.springs.offsets, &self.springs.items),
+            hinges: self
+                .hinges
+                .as_ref()
+                .map(|(h, c)| (&c.offsets[..], &c.items[..], &h[..])),
+            seams: self
+                .seams
+                .as_ref()
+                .map(|(s, c)| (&c.offsets[..], &c.items[..], &s[..])),
+        }
+    }
+}
+
+/// One level's arrays of the Newton step's linear system (level 0: the fine level).
+pub struct LevelArrays {
+    /// Its matrix, in its pattern's order (level 0: the assembled Hessian).
+    pub blocks: Vec<Mat3>,
+    /// Its right-hand side (level 0: the conjugate-gradient residual r).
+    pub rhs: Vec<Vec4>,
+    /// Its correction (level 0: the preconditioned residual z).
+    pub e: Vec<Vec4>,
+    /// Its residual rhs − A·e.
+    pub res: Vec<Vec4>,
+}
+
+impl LevelArrays {
+    fn new(particles: usize, blocks: usize) -> LevelArrays {
+        LevelArrays {
+            blocks: vec![Mat3::ZERO; blocks],
+            rhs: vec![Vec4::ZERO; particles],
+            e: vec![Vec4::ZERO; particles],
+            res: vec![Vec4::ZERO; particles],
+        }
+    }
+}
+
+/// The Newton step's arrays.
+pub struct Newton {
+    /// The hierarchy.
+    pub structure: Arc<Multigrid>,
+    /// The fine force f at the last assembly.
+    pub force: Vec<Vec4>,
+    /// Every level's linear system, the fine level first.
+    pub levels: Vec<LevelArrays>,
+    /// The correction c (the conjugate-gradient solution).
+    pub correction: Vec<Vec4>,
+    /// The search direction p.
+    pub p: Vec<Vec4>,
+    /// H·p.
+    pub ap: Vec<Vec4>,
+    /// The conjugate-gradient scalars.
+    pub scalars: PcgScalars,
+    /// The line search's energy partials.
+    pub energy: Vec<Vec4>,
+    /// The step length of each Newton step of the last substep.
+    pub alphas: Vec<f32>,
+}
+
+/// Vertex Block Descent: the elements, the colour order and sweeps, and the solve's arrays.
+pub struct Vbd {
+    elements: Arc<Elements>,
+    /// Vertices sorted by colour.
+    pub order: Vec<u32>,
+    /// Every colour of one sweep.
+    pub colours: Vec<Sweep>,
+    /// The substep's operations.
+    pub schedule: Vec<SolveOp>,
+    /// The iterate: each particle's displacement over the step (w = inverse mass).
+    pub x: Vec<Vec4>,
+    /// The inertial target, as a displacement.
+    pub y: Vec<Vec4>,
+    /// The largest Newton step of each sweep of the last substep, in m.
+    pub steps: Vec<f32>,
+    /// Each body's contact plane per particle (body after body).
+    pub planes: Vec<Vec4>,
+    /// Each particle's normal force per body at the start of the step.
+    pub lambdas: Vec<Vec4>,
+    /// Newton's method's arrays, with coarse levels.
+    pub newton: Option<Newton>,
+    /// The force residual's partials.
+    pub residual_partials: Vec<Vec4>,
+    /// The last measured force residual: largest and RMS |f|/(m·g).
+    pub residual: (f32, f32),
+    /// Every force residual measured in the last substep, in order, with the sweeps run
+    /// before it.
+    pub history: Vec<(u32, f32, f32)>,
+    /// Sweeps run, in all; and as many as were last reported.
+    pub iterations_run: (u64, u64),
+    /// With `profile` on: seconds spent in each kind of operation, and how many ran.
+    pub profile: Option<std::collections::BTreeMap<&'static str, (u64, f64)>>,
+}
+
+impl Vbd {
+    /// The solve's arrays for `model` stepping with `params` through `schedule`.
+    pub fn new(model: &ClothModel, params: &SimParams, schedule: Vec<SolveOp>) -> Vbd {
+        let n = model.len();
+        let coloring = model.vertex_coloring();
+        let groups = n.div_ceil(WORKGROUP_SIZE as usize).max(1);
+        let sweeps = schedule
+            .iter()
+            .filter(|op| matches!(op, SolveOp::Sweep { .. }))
+            .count();
+        let newton = schedule.contains(&SolveOp::Assemble).then(|| {
+            let structure = model
+                .multigrid
+                .clone()
+                .expect("a multigrid schedule has levels");
+            let mut levels = vec![LevelArrays::new(n, structure.fine.blocks())];
+            levels.extend(
+                (structure.levels.iter()).map(|l| LevelArrays::new(l.len(), l.pattern.blocks())),
+            );
+            Newton {
+                force: vec![Vec4::ZERO; n],
+                levels,
+                correction: vec![Vec4::ZERO; n],
+                p: vec![Vec4::ZERO; n],
+                ap: vec![Vec4::ZERO; n],
+                scalars: PcgScalars::default(),
+                energy: vec![Vec4::ZERO; groups],
+                alphas: Vec::new(),
+                structure,
+            }
+        });
+        Vbd {
+            elements: Arc::new(Elements::new(model)),
+            colours: coloring.sweeps(1),
+            order: coloring.order,
+            schedule,
+            x: vec![Vec4::ZERO; n],
+            y: vec![Vec4::ZERO; n],
+            steps: vec![0.0; sweeps.max(1)],
+            planes: vec![Vec4::ZERO; n * (params.num_bodies as usize).max(1)],
+            lambdas: vec![Vec4::ZERO; n],
+            newton,
+            residual_partials: vec![Vec4::ZERO; groups],
+            residual: (0.0, 0.0),
+            history: Vec::new(),
+            iterations_run: (0, 0),
+            profile: None,
+        }
+    }
+
+    /// Runs the substep's solve (between `vbd_init` and `vbd_finish`): every operation of the
+    /// schedule, until the schedule ends or a tolerance check finds the solve converged.
+    pub fn solve(
+        &mut self,
+        params: &SimParams,
+        step: &SubstepParams,
+        prev: &[Vec4],
+        sdfs: &[&[f32]],
+    ) {
+        let elements = self.elements.clone();
+        let el = elements.view();
+        if let Some(c) = &mut self.newton {
+            c.alphas.clear();
+        }
+        self.history.clear();
+        let mut swept = 0;
+        let schedule = self.schedule.clone();
+        for op in schedule {
+            let started = self.profile.is_some().then(std::time::Instant::now);
+            self.run_op(op, params, step, prev, sdfs, &el, &mut swept);
+            if let (Some(t), Some(p)) = (started, &mut self.profile) {
+                let e = p.entry(op.kind()).or_insert((0, 0.0));
+                e.0 += 1;
+                e.1 += t.elapsed().as_secs_f64();
+            }
+            if op == SolveOp::CheckConverged && self.residual.1 <= params.tolerance {
+                return;
+            }
+        }
+    }
+
+    /// One operation of the schedule.
+    #[allow(clippy::too_many_arguments)]
+    fn run_op(
+        &mut self,
+        op: SolveOp,
+        params: &SimParams,
+        step: &SubstepParams,
+        prev: &[Vec4],
+        sdfs: &[&[f32]],
+        el: &VbdElements,
+        swept: &mut u32,
+    ) {
+        {
+            if op == SolveOp::ContactPlanes {
+                let s = Implicit {
+                    params,
+                    step,
+                    prev,
+                    target: &self.y,
+                    el,
+                    planes: &[],
+                    lambdas: &[],
+                };
+                contact_planes(&s, &self.x, sdfs, &mut self.planes, &mut self.lambdas);
+                return;
+            }
+            let s = Implicit {
+                params,
+                step,
+                prev,
+                target: &self.y,
+                el,
+                planes: &self.planes,
+                lambdas: &self.lambdas,
+            };
+            match op {
+                SolveOp::Sweep { iteration } => {
+                    for colour in &self.colours {
+                        let sweep = Sweep {
+                            iteration,
+                            ..*colour
+                        };
+                        vbd_solve(&s, &sweep, &self.order, &mut self.x, &mut self.steps);
+                    }
+                    self.iterations_run.0 += 1;
+                    *swept += 1;
+                }
+                SolveOp::ForceResidual => {
+                    force_residual(&s, &self.x, &mut self.residual_partials);
+                    self.residual = reduce_residual(&self.residual_partials);
+                    self.history
+                        .push((*swept, self.residual.0, self.residual.1));
+                }
+                SolveOp::CheckConverged => {}
+                _ => {
+                    let newton = self
+                        .newton
+                        .as_mut()
+                        .expect("Newton steps need coarse levels");
+                    let fine = FineColours {
+                        order: &self.order,
+                        colours: &self.colours,
+                    };
+                    newton.run(op, &s, &fine, &mut self.x);
+                }
+            }
+        }
+    }
+}
+
+/// The fine level's colours, for its Gauss–Seidel sweeps.
+struct FineColours<'a> {
+    order: &'a [u32],
+    colours: &'a [Sweep],
+}
+
+impl Newton {
+    /// One operation of a Newton step.
+    fn run(&mut self, op: SolveOp, s: &Implicit, fine: &FineColours, x: &mut [Vec4]) {
+        let mg = &*self.structure;
+        let level = |l: u32| &mg.levels[l as usize - 1];
+        let pattern = |l: u32| if l == 0 { &mg.fine } else { &level(l).pattern };
+        match op {
+            SolveOp::Assemble => {
+                let l0 = &mut self.levels[0];
+                assemble(
+                    s,
+                    x,
+                    &mg.fine,
+                    &mg.element_blocks,
+                    &mut self.force,
+                    &mut l0.blocks,
+                )
+            }
+            SolveOp::CoarseOperator { level: l } => {
+                let (finer, coarse) = self.levels.split_at_mut(l as usize);
+                coarse_operator(
+                    &level(l).galerkin,
+                    &finer[l as usize - 1].blocks,
+                    &mut coarse[0].blocks,
+                );
+            }
+            SolveOp::PcgStart => {
+                let l0 = &mut self.levels[0];
+                pcg_start(&self.force, &mut self.correction, &mut l0.rhs, &mut l0.e);
+            }
+            SolveOp::Smooth { level: l, backward } => {
+                let a = &mut self.levels[l as usize];
+                let colours: Vec<&[u32]> = if l == 0 {
+                    (fine.colours.iter())
+                        .map(|c| &fine.order[c.first as usize..(c.first + c.count) as usize])
+                        .collect()
+                } else {
+                    let lv = level(l);
+                    (0..lv.colors())
+                        .map(|k| {
+                            &lv.order
+                                [lv.color_offsets[k] as usize..lv.color_offsets[k + 1] as usize]
+                        })
+                        .collect()
+                };
+                let mut run = |rows: &[u32]| smooth(pattern(l), &a.blocks, rows, &a.rhs, &mut a.e);
+                match backward {
+                    false => colours.iter().for_each(|rows| run(rows)),
+                    true => colours.iter().rev().for_each(|rows| run(rows)),
+                }
+            }
+            SolveOp::Residual { level: l } => {
+                let a = &mut self.levels[l as usize];
+                level_residual(pattern(l), &a.blocks, &a.rhs, &a.e, &mut a.res);
+            }
+            SolveOp::Restrict { to } => {
+                let (finer, coarse) = self.levels.split_at_mut(to as usize);
+                let c = &mut coarse[0];
+                restrict(
+                    &level(to).children,
+                    &finer[to as usize - 1].res,
+                    &mut c.rhs,
+                    &mut c.e,
+                );
+            }
+            SolveOp::Prolong { from } => {
+                let (finer, coarse) = self.levels.split_at_mut(from as usize);
+                let lv = level(from);
+                prolong(
+                    &lv.parents,
+                    &lv.weights,
+                    &coarse[0].e,
+                    &mut finer[from as usize - 1].e,
+                );
+            }
+            SolveOp::PcgDirection { first } => {
+                let l0 = &self.levels[0];
+                pcg_direction(first, &l0.rhs, &l0.e, &mut self.p, &mut self.scalars);
+            }
+            SolveOp::PcgMatVec => {
+                let l0 = &self.levels[0];
+                pcg_matvec(
+                    &mg.fine,
+                    &l0.blocks,
+                    &self.p,
+                    &mut self.ap,
+                    &mut self.scalars,
+                );
+            }
+            SolveOp::PcgStep => {
+                let l0 = &mut self.levels[0];
+                let (c, r, z) = (&mut self.correction, &mut l0.rhs, &mut l0.e);
+                pcg_step(&self.scalars, &self.p, &self.ap, c, r, z);
+            }
+            SolveOp::CorrectionFilter => correction_filter(s, x, &mut self.correction),
+            SolveOp::LineEnergy => line_energy(s, x, &self.correction, &mut self.energy),
+            SolveOp::LineSearch => self.alphas.push(line_search(&self.energy)),
+            SolveOp::ApplyCorrection => {
+                let alpha = self.alphas.last().copied().unwrap_or(0.0);
+                apply_correction(alpha, &self.correction, x);
+            }
+            other => unreachable!("{other:?} is not a Newton-step operation"),
+        }
+    }
+}

@@ -1,0 +1,515 @@
+//! Implicit Euler's incremental potential at one vertex: its force (−gradient), its Hessian
+//! blocks and the change of its energy along a correction. Every implicit stage (`vbd_solve`,
+//! `assemble`, `line_energy`, `force_residual`) evaluates these; `kernels/implicit_terms.wgsl`
+//! is their GPU twin.
+//!
+//! Backward Euler is x_{n+1} = argmin G(x) with
+//! G(x) = ½‖x − y‖²_M / h² + ½(c·m/h)‖x − xₙ‖² + E(x) + friction.
+//! The iterate is kept as the displacement D = x − xₙ of each vertex over the step, not as a
+//! world position: a 5 mm edge at 1.3 m keeps 8 fewer bits in world coordinates (ulp 1.2e-7 m)
+//! than as a difference of displacements (ulp ~1e-10 m over a millimetre), and a spring's
+//! force k·1.2e-7 m is already several times a 5 mm particle's weight. Edge vectors are
+//! (xₙᵢ − xₙⱼ) + (Dᵢ − Dⱼ): the first difference is exact in f32 for nearby points.
+//!
+//! The terms (each a potential in D within a step, so that a line search can compare
+//! energies):
+//! - inertia ½(m/h²)|D − Y|², Y = h·vₙ + h²·(g + f_wind/m); air damping ½(c·m/h)|D|²;
+//! - springs ½k(|d| − L)², Hessian made positive semi-definite (a compressed spring's
+//!   transverse term dropped), and damping ½(c/h)(n̂ₙ·(Dᵢ − Dⱼ))² along the spring's
+//!   direction at the start of the step n̂ₙ;
+//! - hinges w₀·ψ(θ), ψ = −2cos(θ/2) − sin(θ₀/2)·θ, whose gradient is the Bridson hinge force
+//!   w₀(sin(θ/2) − sin(θ₀/2))·u with the hinge's rest weight w₀ (`Hinge::rest_weight`);
+//!   Gauss–Newton Hessian ½cos(θ/2)·w₀·uᵢuⱼᵀ;
+//! - seam pairs ½k|gap|² (zero rest) or ½k(|gap| − r)² beyond a shrinking rest gap r, and
+//!   damping ½(c/h)|opening|²; the partner's ends take −(1 − w) and −w shares;
+//! - contact with each body through a plane fixed for the step (`contact_planes`):
+//!   φ ≈ c + n̂·D, penalty ½k_c(thickness − φ)² where φ < thickness, k_c = `CONTACT_RATIO`
+//!   times the vertex's constant stiffness (`contact_stiffness`);
+//! - friction as a lagged potential μλ·f₀(|u_T|) with the normal force λ estimated at the
+//!   start of the step (`contact_planes`), u_T the slip relative to the body in the plane and
+//!   f₀(s) = s²/(2ε) below ε = ε_v·h, s − ε/2 above: Coulomb friction, static (proportional to
+//!   the slip) below the slip speed ε_v.
+
+use super::collide_body::{body_velocity_at, to_body_frame};
+use super::hinge_forces::HingeFrame;
+use super::seam_forces::rest_gap;
+use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams};
+use crate::model::multigrid::ElementBlocks;
+use glam::{Mat3, Vec3, Vec3A, Vec4};
+
+/// Contact is this many times stiffer than the vertex's own stiffness (`contact_stiffness`),
+/// whatever the fabric and step.
+pub const CONTACT_RATIO: f32 = 100.0;
+
+/// A vertex within this fraction of the thickness outside a body's contact layer touches the
+/// body: resting vertices sit at the layer's edge, where a sweep's step or `collide_body`
+/// leaves them, give or take the SDF's rounding. Touching vertices get friction's normal force
+/// at the start of a step (`contact_planes`), and their normal is left out of the Newton
+/// step's linear system and of the force residual.
+pub const CONTACT_SLACK_FRACTION: f32 = 0.01;
+
+/// The elements a vertex gathers over, as CSR lists (the same arrays the force stages use).
+pub struct VbdElements<'a> {
+    /// Spring offsets per particle and incident springs.
+    pub springs: (&'a [u32], &'a [SpringRef]),
+    /// Hinge offsets, hinge refs (index · 4 + role) and hinges, when bending is on.
+    pub hinges: Option<(&'a [u32], &'a [u32], &'a [Hinge])>,
+    /// Seam offsets, seam refs (index · 4 + role) and seam pairs, when the cloth is sewn.
+    pub seams: Option<(&'a [u32], &'a [u32], &'a [Seam])>,
+}
+
+/// What every implicit stage reads: the step, the state at its start, the elements and the
+/// contact planes.
+pub struct Implicit<'a> {
+    /// Run-constant parameters.
+    pub params: &'a SimParams,
+    /// This substep's values (bodies at their poses at its end).
+    pub step: &'a SubstepParams,
+    /// xₙ, w = inverse mass (0: pinned).
+    pub prev: &'a [Vec4],
+    /// The inertial target Y as a displacement from xₙ.
+    pub target: &'a [Vec4],
+    /// The elements.
+    pub el: &'a VbdElements<'a>,
+    /// Each body's contact plane at each vertex, body after body (`num_bodies × n`): normal
+    /// (xyz) and c (w), φ ≈ c + n̂·D.
+    pub planes: &'a [Vec4],
+    /// Each vertex's normal force per body at the start of the step (friction's λ), in N.
+    pub lambdas: &'a [Vec4],
+}
+
+/// A vertex's force and Hessian diagonal block.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VertexSystem {
+    /// f = −∇ᵢG, in N.
+    pub force: Vec3,
+    /// ∂²G/∂Dᵢ², in N/m.
+    pub hessian: Mat3,
+}
+
+pub(super) fn outer(a: Vec3, b: Vec3) -> Mat3 {
+    Mat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+/// Hessian of ½k(|d| − L)² in d, made positive semi-definite: k·(n̂n̂ᵀ + max(0, 1 − L/|d|)·
+/// (I − n̂n̂ᵀ)). The transverse term is negative for a compressed spring; it is dropped.
+fn spring_hessian(k: f32, rest: f32, d: Vec3, len: f32) -> Mat3 {
+    let n = d / len;
+    let nn = outer(n, n);
+    let transverse = (1.0 - rest / len).max(0.0);
+    k * nn + (k * transverse) * (Mat3::IDENTITY - nn)
+}
+
+fn v3(v: Vec4) -> Vec3 {
+    v.truncate()
+}
+
+impl Implicit<'_> {
+    fn n(&self) -> usize {
+        self.params.num_particles as usize
+    }
+
+    /// Vertex `i`'s plane for body `b`.
+    pub fn plane(&self, b: usize, i: usize) -> Vec4 {
+        self.planes[b * self.n() + i]
+    }
+
+    /// A seam pair's gap (partner point minus seam vertex) and opening (its change over the
+    /// step) at displacements `d`.
+    fn seam_gap(&self, s: &Seam, d: &[Vec4]) -> (Vec3, Vec3) {
+        let w = s.weight;
+        let [a, b0, b1] = [s.v[0], s.v[1], s.v[2]].map(|v| v3(self.prev[v as usize]));
+        let opening = seam_combination(s, d);
+        let start = (1.0 - w) * (b0 - a) + w * (b1 - a);
+        (start + opening, opening)
+    }
+
+    /// A seam pair's spring force on its seam vertex and that force's Hessian (a zero rest gap
+    /// pulls like a zero-length spring; a positive one only beyond it), plus damping.
+    fn seam_system(&self, s: &Seam, d: &[Vec4]) -> (Vec3, Mat3) {
+        let h = self.params.dt;
+        let (gap, opening) = self.seam_gap(s, d);
+        let rest = rest_gap(s, self.params, self.step.time);
+        let mut fa = s.damping / h * opening;
+        let mut ha = Mat3::from_diagonal(Vec3::splat(s.damping / h));
+        if rest <= 0.0 {
+            fa += s.stiffness * gap;
+            ha += Mat3::from_diagonal(Vec3::splat(s.stiffness));
+        } else {
+            let len = gap.length();
+            if len > rest {
+                fa += s.stiffness * (len - rest) / len * gap;
+                ha += spring_hessian(s.stiffness, rest, gap, len);
+            }
+        }
+        (fa, ha)
+    }
+
+    /// The frame of hinge `hinge` at displacements `d` (world positions xₙ + D).
+    fn hinge_frame(&self, hinge: &Hinge, d: &[Vec4]) -> Option<HingeFrame> {
+        let x = |v: u32| Vec3A::from(v3(self.prev[v as usize]) + v3(d[v as usize]));
+        HingeFrame::at(hinge.v.map(x), hinge.stiffness)
+    }
+
+    /// The vertex's constant stiffness, the mean diagonal of what does not depend on the
+    /// state: inertia m/h², air damping, each spring's (k + c/h)/3 and each seam pair's
+    /// share²·(k + c/h). Contact is `CONTACT_RATIO` times this.
+    pub fn contact_stiffness(&self, i: usize) -> f32 {
+        let h = self.params.dt;
+        let mass = 1.0 / self.prev[i].w;
+        let mut sum = mass / (h * h) + self.params.air_damping * mass / h;
+        let (offsets, springs) = self.el.springs;
+        for s in &springs[offsets[i] as usize..offsets[i + 1] as usize] {
+            sum += (s.stiffness + s.damping / h) / 3.0;
+        }
+        if let Some((offsets, refs, seams)) = self.el.seams {
+            for &r in &refs[offsets[i] as usize..offsets[i + 1] as usize] {
+                let s = &seams[(r / 4) as usize];
+                let share = seam_share(s, r % 4);
+                sum += share * share * (s.stiffness + s.damping / h);
+            }
+        }
+        CONTACT_RATIO * sum
+    }
+
+    /// Body `b`'s slip of vertex `i` over the step relative to the body surface, in the plane
+    /// with normal `n`: the displacement less the body's own over the step.
+    fn slip(&self, b: usize, i: usize, d: Vec3, n: Vec3) -> Vec3 {
+        let pose = &self.step.bodies[b];
+        let (_, offset) = to_body_frame(pose, v3(self.prev[i]));
+        let u = d - self.params.dt * body_velocity_at(pose, offset);
+        u - u.dot(n) * n
+    }
+
+    /// Vertex `i`'s force and Hessian diagonal block at displacements `d` (a pinned vertex's
+    /// are zero). With `blocks`, each off-diagonal block of the vertex's Hessian row goes to
+    /// `sink` (block index, value); blocks towards pinned vertices are left out.
+    pub fn vertex_system(
+        &self,
+        i: usize,
+        d: &[Vec4],
+        blocks: Option<&ElementBlocks>,
+        sink: &mut impl FnMut(u32, Mat3),
+    ) -> VertexSystem {
+        let p = self.params;
+        let h = p.dt;
+        let inv_mass = self.prev[i].w;
+        if inv_mass == 0.0 {
+            return VertexSystem {
+                force: Vec3::ZERO,
+                hessian: Mat3::ZERO,
+            };
+        }
+        let free = |j: usize| self.prev[j].w != 0.0;
+        let mass = 1.0 / inv_mass;
+        let di = v3(d[i]);
+        let inertia = mass / (h * h);
+        let air = p.air_damping * mass / h;
+        let mut f = -inertia * (di - v3(self.target[i])) - air * di;
+        let mut hess = Mat3::from_diagonal(Vec3::splat(inertia + air));
+
+        let (offsets, springs) = self.el.springs;
+        for k in offsets[i]..offsets[i + 1] {
+            let s = springs[k as usize];
+            let j = s.other as usize;
+            let start = v3(self.prev[i]) - v3(self.prev[j]);
+            let change = di - v3(d[j]);
+            let e = start + change;
+            let len = e.length();
+            let start_len = start.length();
+            let mut block = Mat3::ZERO;
+            if len > 1e-12 {
+                f -= s.stiffness * (len - s.rest_length) / len * e;
+                block += spring_hessian(s.stiffness, s.rest_length, e, len);
+            }
+            if start_len > 1e-12 {
+                let n = start / start_len;
+                f -= s.damping / h * n.dot(change) * n;
+                block += (s.damping / h) * outer(n, n);
+            }
+            hess += block;
+            if let Some(b) = blocks.filter(|_| free(j)) {
+                sink(b.springs[k as usize], -block);
+            }
+        }
+
+        if let Some((offsets, refs, hinges)) = self.el.hinges {
+            for k in offsets[i]..offsets[i + 1] {
+                let r = refs[k as usize];
+                let hinge = &hinges[(r / 4) as usize];
+                let Some(t) = self.hinge_frame(hinge, d) else {
+                    continue;
+                };
+                let role = r % 4;
+                let u = t.direction(role);
+                f += hinge.rest_weight * (t.sin_half - hinge.rest_sin_half) * u;
+                let cos_half = (1.0 - t.sin_half * t.sin_half).max(0.0).sqrt();
+                let c = 0.5 * cos_half * hinge.rest_weight;
+                hess += c * outer(u, u);
+                if let Some(b) = blocks {
+                    for other in (0..4).filter(|&o| o != role) {
+                        if free(hinge.v[other as usize] as usize) {
+                            let block = c * outer(u, t.direction(other));
+                            sink(b.hinges[k as usize][other as usize], block);
+                        }
+                    }
+                }
+            }
+        }
+
+        if let Some((offsets, refs, seams)) = self.el.seams {
+            for k in offsets[i]..offsets[i + 1] {
+                let r = refs[k as usize];
+                let s = &seams[(r / 4) as usize];
+                let (fa, ha) = self.seam_system(s, d);
+                let share = seam_share(s, r % 4);
+                f += share * fa;
+                hess += (share * share) * ha;
+                if let Some(b) = blocks {
+                    for other in (0..3).filter(|&o| o != r % 4) {
+                        let (j, share_j) = (s.v[other as usize], seam_share(s, other));
+                        if free(j as usize) && share_j != 0.0 {
+                            sink(b.seams[k as usize][other as usize], (share * share_j) * ha);
+                        }
+                    }
+                }
+            }
+        }
+
+        if p.num_bodies > 0 {
+            let k_c = self.contact_stiffness(i);
+            for b in 0..p.num_bodies as usize {
+                let body = &p.bodies[b];
+                let plane = self.plane(b, i);
+                let n = v3(plane);
+                let phi = plane.w + n.dot(di);
+                if phi < body.thickness {
+                    f += k_c * (body.thickness - phi) * n;
+                    hess += k_c * outer(n, n);
+                }
+                let lambda = self.lambdas[i][b];
+                if lambda > 0.0 && body.friction > 0.0 {
+                    let u = self.slip(b, i, di, n);
+                    let scale =
+                        body.friction * lambda / u.length().max(body.friction_slip_speed * h);
+                    f -= scale * u;
+                    hess += scale * (Mat3::IDENTITY - outer(n, n));
+                }
+            }
+        }
+        VertexSystem {
+            force: f,
+            hessian: hess,
+        }
+    }
+
+    /// The change of G along the correction `c` (m per vertex) for each step length in
+    /// `alphas`, counted at vertex `i`: its own terms (inertia, air damping, contact,
+    /// friction) and the elements it owns (a spring at its lower-numbered end, a hinge and a
+    /// seam pair at its first vertex), so that every element counts once. Each change is
+    /// computed as a difference of nearby quantities (d·Δ and |Δ|², not G(x + αc) − G(x)), so
+    /// it keeps its own precision however large G is.
+    pub fn energy_change(&self, i: usize, d: &[Vec4], c: &[Vec4], alphas: [f32; 3]) -> [f32; 3] {
+        let p = self.params;
+        let h = p.dt;
+        let mut out = [0.0f32; 3];
+        let di = v3(d[i]);
+        let ci = v3(c[i]);
+        if self.prev[i].w != 0.0 {
+            let mass = 1.0 / self.prev[i].w;
+            let inertia = mass / (h * h);
+            let air = p.air_damping * mass / h;
+            let to_target = di - v3(self.target[i]);
+            for (o, &a) in out.iter_mut().zip(&alphas) {
+                let sq = a * a * ci.length_squared();
+                *o += inertia * (a * ci.dot(to_target) + 0.5 * sq)
+                    + air * (a * ci.dot(di) + 0.5 * sq);
+            }
+            self.contact_change(i, di, ci, alphas, &mut out);
+        }
+
+        let (offsets, springs) = self.el.springs;
+        for s in &springs[offsets[i] as usize..offsets[i + 1] as usize] {
+            let j = s.other as usize;
+            if j < i {
+                continue;
+            }
+            let start = v3(self.prev[i]) - v3(self.prev[j]);
+            let change = di - v3(d[j]);
+            let e = start + change;
+            let dc = ci - v3(c[j]);
+            let len = e.length();
+            let start_len = start.length();
+            let n = if start_len > 1e-12 {
+                start / start_len
+            } else {
+                Vec3::ZERO
+            };
+            for (o, &a) in out.iter_mut().zip(&alphas) {
+                let grow = 2.0 * a * e.dot(dc) + a * a * dc.length_squared();
+                let len2 = (e + a * dc).length();
+                // l' − l = (|e'|² − |e|²)/(l' + l): no cancellation of two lengths.
+                let dl = if len + len2 > 0.0 {
+                    grow / (len + len2)
+                } else {
+                    0.0
+                };
+                let stretch = 0.5 * s.stiffness * dl * (len + len2 - 2.0 * s.rest_length);
+                let dn = a * n.dot(dc);
+                *o += stretch + 0.5 * s.damping / h * dn * (2.0 * n.dot(change) + dn);
+            }
+        }
+
+        if let Some((offsets, refs, hinges)) = self.el.hinges {
+            for &r in &refs[offsets[i] as usize..offsets[i + 1] as usize] {
+                if r % 4 != 0 {
+                    continue;
+                }
+                let hinge = &hinges[(r / 4) as usize];
+                let before = self.hinge_energy(hinge, d, c, 0.0);
+                for (o, &a) in out.iter_mut().zip(&alphas) {
+                    *o += self.hinge_energy(hinge, d, c, a) - before;
+                }
+            }
+        }
+
+        if let Some((offsets, refs, seams)) = self.el.seams {
+            for &r in &refs[offsets[i] as usize..offsets[i + 1] as usize] {
+                if r % 4 != 0 {
+                    continue;
+                }
+                let s = &seams[(r / 4) as usize];
+                let (gap, opening) = self.seam_gap(s, d);
+                let dg = seam_combination(s, c);
+                let rest = rest_gap(s, p, self.step.time);
+                for (o, &a) in out.iter_mut().zip(&alphas) {
+                    let damping = 0.5 * s.damping / h
+                        * (2.0 * a * opening.dot(dg) + a * a * dg.length_squared());
+                    let spring = if rest <= 0.0 {
+                        0.5 * s.stiffness * (2.0 * a * gap.dot(dg) + a * a * dg.length_squared())
+                    } else {
+                        let over = |g: Vec3| (g.length() - rest).max(0.0);
+                        let (o0, o1) = (over(gap), over(gap + a * dg));
+                        0.5 * s.stiffness * (o1 - o0) * (o1 + o0)
+                    };
+                    *o += damping + spring;
+                }
+            }
+        }
+        out
+    }
+
+    /// Contact and friction's share of `energy_change` at free vertex `i`.
+    fn contact_change(&self, i: usize, di: Vec3, ci: Vec3, alphas: [f32; 3], out: &mut [f32; 3]) {
+        let p = self.params;
+        if p.num_bodies == 0 {
+            return;
+        }
+        let k_c = self.contact_stiffness(i);
+        for b in 0..p.num_bodies as usize {
+            let body = &p.bodies[b];
+            let plane = self.plane(b, i);
+            let n = v3(plane);
+            let depth = body.thickness - (plane.w + n.dot(di));
+            let lambda = self.lambdas[i][b];
+            let eps = body.friction_slip_speed * p.dt;
+            let slip = self.slip(b, i, di, n);
+            let dslip = ci - ci.dot(n) * n;
+            for (o, &a) in out.iter_mut().zip(&alphas) {
+                let depth2 = depth - a * n.dot(ci);
+                let (p0, p1) = (depth.max(0.0), depth2.max(0.0));
+                *o += 0.5 * k_c * (p1 - p0) * (p1 + p0);
+                if lambda > 0.0 && body.friction > 0.0 {
+                    let f0 = |s: f32| {
+                        if s < eps {
+                            s * s / (2.0 * eps)
+                        } else {
+                            s - 0.5 * eps
+                        }
+                    };
+                    let (s0, s1) = (slip.length(), (slip + a * dslip).length());
+                    *o += body.friction * lambda * (f0(s1) - f0(s0));
+                }
+            }
+        }
+    }
+
+    /// Hinge energy w₀·ψ(θ) at displacements d + a·c (0 for a degenerate hinge).
+    fn hinge_energy(&self, hinge: &Hinge, d: &[Vec4], c: &[Vec4], a: f32) -> f32 {
+        let x = |v: u32| {
+            let v = v as usize;
+            Vec3A::from(v3(self.prev[v]) + (v3(d[v]) + a * v3(c[v])))
+        };
+        match HingeFrame::at(hinge.v.map(x), hinge.stiffness) {
+            Some(t) => hinge.rest_weight * hinge_psi(t.sin_half, hinge.rest_sin_half),
+            None => 0.0,
+        }
+    }
+
+    /// Whether vertex `i` at displacement `d` touches body `b` (within `CONTACT_SLACK_FRACTION`
+    /// of its contact layer, or inside it).
+    pub fn touching(&self, b: usize, i: usize, d: Vec3) -> bool {
+        let plane = self.plane(b, i);
+        let thickness = self.params.bodies[b].thickness;
+        plane.w + v3(plane).dot(d) < thickness * (1.0 + CONTACT_SLACK_FRACTION)
+    }
+
+    /// The projection that removes the normals of the bodies vertex `i` touches at
+    /// displacements `d`, Gram–Schmidt over the bodies in order; the
+    /// identity without contact. The Newton step's linear system is solved in these filtered
+    /// coordinates (Baraff and Witkin 1998's filtered conjugate gradients): the contact normal
+    /// stays with the sweeps' local solve, and the penalty's stiffness (100 times everything
+    /// else) never enters the f32 conjugate gradients, where it drowned the soft directions.
+    pub fn contact_filter(&self, i: usize, d: &[Vec4]) -> Mat3 {
+        let mut s = Mat3::IDENTITY;
+        if self.prev[i].w == 0.0 {
+            return s;
+        }
+        let di = v3(d[i]);
+        for b in 0..self.params.num_bodies as usize {
+            let n = v3(self.plane(b, i));
+            if self.touching(b, i, di) {
+                let m = s * n;
+                let len = m.length();
+                if len > 1e-3 {
+                    let u = m / len;
+                    s -= outer(u, u);
+                }
+            }
+        }
+        s
+    }
+
+    /// |fᵢ| / (mᵢ·g) at vertex `i` with the normals of the bodies it touches left out (the
+    /// body's reaction there balances them, whatever the penalty's depth); 0 for a pinned
+    /// vertex. `g` is gravity's magnitude.
+    pub fn force_residual(&self, i: usize, d: &[Vec4], g: f32) -> f32 {
+        if self.prev[i].w == 0.0 {
+            return 0.0;
+        }
+        let f = self.vertex_system(i, d, None, &mut |_, _| {}).force;
+        (self.contact_filter(i, d) * f).length() * self.prev[i].w / g
+    }
+}
+
+/// ψ(θ) = −2cos(θ/2) − sin(θ₀/2)·θ from s = sin(θ/2) and s₀ = sin(θ₀/2): dψ/dθ = s − s₀.
+pub fn hinge_psi(s: f32, s0: f32) -> f32 {
+    let s = s.clamp(-1.0, 1.0);
+    -2.0 * (1.0 - s * s).max(0.0).sqrt() - 2.0 * s0 * s.asin()
+}
+
+/// (1 − w)·v[b0] + w·v[b1] − v[a] of a seam pair over per-vertex values `v`.
+fn seam_combination(s: &Seam, v: &[Vec4]) -> Vec3 {
+    let [a, b0, b1] = [s.v[0], s.v[1], s.v[2]].map(|i| v3(v[i as usize]));
+    (1.0 - s.weight) * b0 + s.weight * b1 - a
+}
+
+/// The share of a seam pair's force that its vertex of `role` takes: 1 for the seam vertex,
+/// −(1 − w) and −w for the partner segment's ends.
+pub fn seam_share(s: &Seam, role: u32) -> f32 {
+    match role {
+        0 => 1.0,
+        1 => -(1.0 - s.weight),
+        _ => -s.weight,
+    }
+}

@@ -1,0 +1,58 @@
+//! CPU twins of `kernels/smooth.wgsl` and `kernels/level_residual.wgsl`.
+
+use super::vbd_solve::solve3;
+use crate::model::multigrid::BlockPattern;
+use glam::{Mat3, Vec3, Vec4};
+use rayon::prelude::*;
+
+/// One block Gauss–Seidel update of the particles `rows` (one colour) of a level's system
+/// A·e = r: e_I = A_II⁻¹(r_I − Σ_J≠I A_IJ·e_J). Rows of one colour share no block, so they
+/// update at once from the same `e`. A row whose diagonal is singular (a pinned particle, or
+/// a coarse one whose children are all pinned) gets e = 0.
+pub fn smooth(pattern: &BlockPattern, blocks: &[Mat3], rows: &[u32], rhs: &[Vec4], e: &mut [Vec4]) {
+    let update = |e: &[Vec4], r: usize| {
+        let (start, end) = (pattern.offsets[r] as usize, pattern.offsets[r + 1] as usize);
+        let mut sum = rhs[r].truncate();
+        for b in start + 1..end {
+            sum -= blocks[b] * e[pattern.columns[b] as usize].truncate();
+        }
+        solve3(blocks[start], sum)
+    };
+    if rows.len() < PARALLEL_ROWS {
+        // No row reads another of its colour, so updating in place gives the same numbers.
+        for &r in rows {
+            e[r as usize] = update(e, r as usize).extend(0.0);
+        }
+        return;
+    }
+    let now: &[Vec4] = e;
+    let updates: Vec<(usize, Vec3)> = rows
+        .par_iter()
+        .map(|&r| (r as usize, update(now, r as usize)))
+        .collect();
+    for (r, v) in updates {
+        e[r] = v.extend(0.0);
+    }
+}
+
+/// Below this many rows a colour is swept on one thread: splitting it costs more than it
+/// saves.
+const PARALLEL_ROWS: usize = 512;
+
+/// The residual r − A·e of a level, row by row in parallel.
+pub fn level_residual(
+    pattern: &BlockPattern,
+    blocks: &[Mat3],
+    rhs: &[Vec4],
+    e: &[Vec4],
+    out: &mut [Vec4],
+) {
+    out.par_iter_mut().enumerate().for_each(|(r, out)| {
+        let (start, end) = (pattern.offsets[r] as usize, pattern.offsets[r + 1] as usize);
+        let mut sum = rhs[r].truncate();
+        for b in start..end {
+            sum -= blocks[b] * e[pattern.columns[b] as usize].truncate();
+        }
+        *out = sum.extend(0.0);
+    });
+}
