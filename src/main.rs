@@ -489,9 +489,12 @@ fn report(summary: &drapekit::output::Summary, out_dir: &std::path::Path) {
         );
     }
     if let Some(s) = &summary.settled {
+        let residual = s.force_residual_rms.map_or(String::new(), |r| {
+            format!(", force residual {r:.2e} of the weight")
+        });
         println!(
-            "settled at frame {} ({} {:.2e} m/s)",
-            s.frame, s.rule, s.rms_speed_m_s
+            "settled at frame {} (RMS speed {:.2e} m/s{residual})",
+            s.frame, s.rms_speed_m_s
         );
     }
     println!(

@@ -80,6 +80,9 @@ pub struct Summary {
     pub last_frame_max_edge_strain: f32,
     /// The strain-limiting stage's cap on edge stretch (0.1 = 10%), or null when it is off.
     pub strain_limit: Option<f32>,
+    /// With the cap on: the edges at it in the last frame (stretched to within 0.1% of the cap
+    /// or past it), which the cap holds rather than the solve.
+    pub strain_limit_clamped_edges: Option<usize>,
     /// Largest particle speed at any output frame, in m/s (from the `monitor` stage).
     pub max_speed_m_s: f32,
     /// Kinetic energy at the last good frame, in J.

@@ -407,25 +407,33 @@ pub fn implicit_schedule(shape: SolveShape) -> Vec<SolveOp> {
         if shape.tolerance {
             ops.extend([SolveOp::ForceResidual, SolveOp::CheckConverged]);
         }
-        ops.push(SolveOp::Assemble);
-        for level in 1..=shape.levels {
-            ops.push(SolveOp::CoarseOperator { level });
-        }
-        ops.push(SolveOp::PcgStart);
-        for k in 0..shape.linear_iterations {
-            v_cycle(&mut ops, shape.levels);
-            ops.push(SolveOp::PcgDirection { first: k == 0 });
-            ops.extend([SolveOp::PcgMatVec, SolveOp::PcgStep]);
-        }
-        ops.extend([
-            SolveOp::CorrectionFilter,
-            SolveOp::LineEnergy,
-            SolveOp::LineSearch,
-            SolveOp::ApplyCorrection,
-        ]);
+        ops.extend(newton_correction(shape));
     }
     sweeps(&mut ops, shape.smoothing);
     ops.push(SolveOp::ForceResidual);
+    ops
+}
+
+/// One Newton step's correction (after its sweeps): the fine system assembled, the coarse
+/// levels' Galerkin matrices, `linear_iterations` of conjugate gradients preconditioned by a
+/// V-cycle, and the line search along the filtered result.
+pub fn newton_correction(shape: SolveShape) -> Vec<SolveOp> {
+    let mut ops = vec![SolveOp::Assemble];
+    for level in 1..=shape.levels {
+        ops.push(SolveOp::CoarseOperator { level });
+    }
+    ops.push(SolveOp::PcgStart);
+    for k in 0..shape.linear_iterations {
+        v_cycle(&mut ops, shape.levels);
+        ops.push(SolveOp::PcgDirection { first: k == 0 });
+        ops.extend([SolveOp::PcgMatVec, SolveOp::PcgStep]);
+    }
+    ops.extend([
+        SolveOp::CorrectionFilter,
+        SolveOp::LineEnergy,
+        SolveOp::LineSearch,
+        SolveOp::ApplyCorrection,
+    ]);
     ops
 }
 

@@ -437,6 +437,7 @@ fn run_scene_from(
         last_frame_max_edge_strain: stats.last_edge_strain,
         strain_limit: (prep.plan.contains(crate::plan::Pass::StrainLimit))
             .then_some(prep.params.strain_limit),
+        strain_limit_clamped_edges: stats.strain_limit_clamped_edges,
         max_speed_m_s: stats.max_speed,
         kinetic_energy_j: stats.kinetic_energy_j,
         seams: stats.seam_gaps.len(),

@@ -200,6 +200,7 @@ pub(super) struct RawSolver {
     pub(super) multigrid: Option<bool>,
     pub(super) smoothing_sweeps: Option<i64>,
     pub(super) settle_speed_m_s: Option<f64>,
+    pub(super) settle_force_residual: Option<f64>,
     /// Replaced by `settle_speed_m_s`; read only to say so.
     pub(super) settle_ke_per_particle_j: Option<f64>,
     #[serde(default = "default_max_substeps")]

@@ -55,6 +55,8 @@ pub struct Prepared {
     pub max_strain: f32,
     /// The settle rule: the free particles' RMS speed below which the cloth is at rest, m/s.
     pub settle_speed: Option<f32>,
+    /// With implicit Euler, the settle rule's force residual (RMS |f|/(m·g)) too.
+    pub settle_force_residual: Option<f32>,
     /// The free (never pinned) particles' mass, in kg, for the RMS speed.
     pub free_mass: f64,
     /// Things the user should know (e.g. a substep above the stable estimate).
@@ -339,6 +341,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         frames: s.frames,
         wind,
         settle_speed: s.settle_speed,
+        settle_force_residual: implicit.then_some(s.settle_force_residual),
         free_mass,
         max_strain: s.max_strain,
         warnings,
@@ -429,6 +432,10 @@ pub struct RunStats {
     /// Iterations the implicit solve ran, over every substep.
     #[serde(default)]
     pub iterations_run: u64,
+    /// With the strain-limiting stage on: the edges at its cap (stretched to within 0.1% of it
+    /// or past it) at the last frame, which the cap, not the solve, holds.
+    #[serde(default)]
+    pub strain_limit_clamped_edges: Option<usize>,
     /// The implicit solve's force residual |f|/(m·g) at the end of the last frame's last
     /// substep: largest and RMS over the free particles.
     #[serde(default)]
@@ -620,6 +627,12 @@ pub fn simulate_from(
         stats.frames_run = frame;
         stats.max_edge_strain = stats.max_edge_strain.max(strain);
         stats.last_edge_strain = strain;
+        if prep.plan.contains(crate::plan::Pass::StrainLimit) {
+            let cap = 0.999 * prep.params.strain_limit;
+            let springs = &prep.model.springs;
+            let held = metrics::edges_stretched_past(&state.positions, springs, cap);
+            stats.strain_limit_clamped_edges = Some(held);
+        }
         stats.kinetic_energy_j = health.kinetic_energy;
         stats.seam_gaps = seam_gaps(&state);
         let mut touching = vec![false; state.positions.len()];
