@@ -4,7 +4,7 @@
 //! The data path: [`scene::Scene`] → [`model::ClothModel`] → [`plan::PassPlan`] →
 //! a [`solver::Solver`] ([`gpu::GpuSolver`] or [`cpu::CpuSolver`]) → frames and a summary.
 //!
-//! Modules form layers that import only downward (README.md, "Architecture"): ground
+//! Modules form layers that import only downward (docs/src/architecture.md): ground
 //! (`error`, `check`, `atomic_file`) → geometry (`mesh`, `pattern`, `body`) → `scene` →
 //! `model` → `plan` and `solver` → backends (`cpu`, `gpu`) and `metrics` → `sim` → outputs
 //! (`run`, `output`, `export`, `bench`, `plot`, `batch`) → the CLI.

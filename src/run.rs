@@ -76,7 +76,7 @@ pub struct RunOptions {
 
 /// Creates the chosen backend; with `Auto`, falls back to the CPU and returns a note saying why.
 /// `Auto` with `--adapter auto` skips software adapters (`DeviceType::Cpu`): the multi-threaded
-/// CPU path measured faster than lavapipe (README, "Benchmarks"). Naming an adapter, or
+/// CPU path measured faster than lavapipe (docs/src/benchmarks/throughput.md). Naming an adapter, or
 /// `--backend gpu`, still runs it.
 pub fn make_solver(
     prep: &Prepared,

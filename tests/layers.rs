@@ -1,7 +1,7 @@
 //! The module layers run one way: a top-level module of `src/` imports (`crate::x`) only from
 //! its own layer or the layers below. `../shared/tools/layers.py` refuses cycles; this test
 //! also refuses an upward import that does not (yet) close a cycle. The table is the one in
-//! README.md ("Architecture").
+//! docs/src/architecture.md.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -65,7 +65,7 @@ fn modules_import_only_downward() {
             continue;
         }
         let Some(&own) = layer.get(top) else {
-            panic!("src/{top} has no layer: add it to LAYERS here and to README.md");
+            panic!("src/{top} has no layer: add it to LAYERS here and to docs/src/architecture.md");
         };
         let text = std::fs::read_to_string(&file).unwrap();
         // Unit tests may reach anywhere.

@@ -130,7 +130,7 @@ pub struct SpatialHash {
 
 impl CpuSolver {
     /// How the CPU evaluates hinges unless the plan says otherwise: once per hinge, measured
-    /// faster here than once per vertex (README, "Benchmarks").
+    /// faster here than once per vertex (docs/src/benchmarks/throughput.md).
     pub const HINGES: HingeEvaluation = HingeEvaluation::Once;
 
     /// A CPU solver for `model` running `plan` (with hinges as `HINGES` if the plan leaves it

@@ -81,7 +81,7 @@ pub struct GpuSolver {
 
 impl GpuSolver {
     /// How the GPU evaluates hinges unless the plan says otherwise: once per vertex, measured
-    /// faster on lavapipe than once per hinge (README, "Benchmarks"; unmeasured on real GPUs).
+    /// faster on lavapipe than once per hinge (docs/src/benchmarks/throughput.md; unmeasured on real GPUs).
     pub const HINGES: HingeEvaluation = HingeEvaluation::PerVertex;
 
     /// Uploads `model` and builds the pipelines of `plan` (with hinges as `HINGES` if the plan

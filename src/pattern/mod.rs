@@ -1,6 +1,6 @@
 //! Sewing patterns in the GarmentCode JSON specification: panels (2D outlines made of straight,
 //! Bézier and arc edges, placed in 3D) and stitches (pairs of edges sewn together).
-//! See README.md ("Patterns") for the fields drapekit reads.
+//! See docs/src/patterns.md for the fields drapekit reads.
 
 pub mod curve;
 pub mod garment;

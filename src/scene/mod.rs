@@ -1,6 +1,6 @@
 //! Scene files (TOML): parsing and validation with precise errors, into plain SI data. A scene
 //! describes; building the cloth model from it is `model`'s job. One file per section; every
-//! key, its unit and its default are documented in README.md ("Scene format").
+//! key, its unit and its default are documented in docs/src/scenes.md.
 
 mod body;
 mod cloth;
@@ -107,7 +107,7 @@ impl Scene {
                 path,
                 "",
                 e.message().trim().to_string(),
-                "see the scene format in README.md: every key, its unit and default",
+                "see the scene format in docs/src/scenes.md: every key, its unit and default",
             )
             .at_line(line)
         })?;
