@@ -10,6 +10,8 @@ const LAYERS: &[(&str, u32)] = &[
     ("error", 1),
     ("check", 1),
     ("atomic_file", 1),
+    ("suggest", 1),
+    ("toml_message", 1),
     ("mesh", 2),
     ("pattern", 2),
     ("body", 2),

@@ -3,6 +3,7 @@
 //! See docs/src/patterns.md for the fields drapekit reads.
 
 pub mod curve;
+mod format;
 pub mod garment;
 pub mod mesher;
 pub mod transfer;
@@ -183,11 +184,23 @@ impl Reader<'_> {
 impl Pattern {
     /// Reads and validates a GarmentCode JSON pattern.
     pub fn load(path: &Path) -> Result<Pattern, InputError> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
+        let bytes = std::fs::read(path).map_err(|e| {
             InputError::new(
                 path,
                 "",
                 format!("cannot read the pattern file: {e}"),
+                "check the path in the scene's [cloth.pattern] table",
+            )
+        })?;
+        if let Some(format) = format::foreign_format(path, &bytes) {
+            let (problem, fix) = format::foreign_format_message(format);
+            return Err(InputError::new(path, "", problem, fix));
+        }
+        let text = String::from_utf8(bytes).map_err(|_| {
+            InputError::new(
+                path,
+                "",
+                "the file is not text (GarmentCode patterns are UTF-8 JSON)",
                 "check the path in the scene's [cloth.pattern] table",
             )
         })?;
@@ -198,6 +211,10 @@ impl Pattern {
     pub fn parse(text: &str, path: &Path) -> Result<Pattern, InputError> {
         let r = Reader { path };
         let root: Value = serde_json::from_str(&non_finite_tokens_to_null(text)).map_err(|e| {
+            if let Some(format) = format::foreign_format(path, text.as_bytes()) {
+                let (problem, fix) = format::foreign_format_message(format);
+                return InputError::new(path, "", problem, fix);
+            }
             InputError::new(
                 path,
                 "",

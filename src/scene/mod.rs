@@ -99,18 +99,8 @@ impl Scene {
 
     /// Parses and validates scene text; `path` locates errors and relative mesh paths.
     pub fn parse(src: &str, path: &Path) -> Result<Scene, InputError> {
-        let raw: RawScene = toml::from_str(src).map_err(|e| {
-            let line = e
-                .span()
-                .map(|s| src[..s.start.min(src.len())].matches('\n').count() + 1);
-            InputError::new(
-                path,
-                "",
-                e.message().trim().to_string(),
-                "see the scene format in docs/src/scenes.md: every key, its unit and default",
-            )
-            .at_line(line)
-        })?;
+        let raw: RawScene =
+            toml::from_str(src).map_err(|e| crate::toml_message::describe(path, src, &e))?;
         let c = Checker { path, src };
         let base = path.parent().unwrap_or(Path::new("."));
         let fabric = fabric::parse(&c, &raw.fabric)?;
