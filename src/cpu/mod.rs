@@ -135,6 +135,25 @@ impl CpuSolver {
 
     /// A CPU solver for `model` running `plan` (with hinges as `HINGES` if the plan leaves it
     /// open).
+    ///
+    /// ```
+    /// use drapekit::cpu::CpuSolver;
+    /// use drapekit::scene::Scene;
+    /// use drapekit::sim::{prepare, substep_params};
+    /// use drapekit::solver::Solver;
+    /// use std::path::Path;
+    ///
+    /// let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    /// let scene = Scene::load(&dir.join("fixtures/scenes/free_fall.toml"))?;
+    /// let prep = prepare(&scene)?;
+    /// let mut solver = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    /// // One output frame: its substeps in one call, then read the state back.
+    /// solver.advance(&substep_params(&prep, 0))?;
+    /// let state = solver.state()?;
+    /// // Falling from rest: everything moves down.
+    /// assert!(state.velocities.iter().all(|v| v.y < 0.0));
+    /// # Ok::<(), drapekit::Error>(())
+    /// ```
     pub fn new(model: &ClothModel, params: SimParams, plan: &PassPlan) -> Self {
         let plan = &plan.for_backend(Self::HINGES);
         let n = model.len();
