@@ -458,7 +458,7 @@ fn tshirt_drape_cotton_sews_rests_and_stays_out_of_the_body() {
 
 #[test]
 fn every_subcommand_help_shows_an_example() {
-    for sub in ["run", "info", "preview", "plan", "bench"] {
+    for sub in ["run", "resume", "info", "preview", "plan", "batch", "bench"] {
         let out = drapekit(&[sub, "--help"]);
         assert!(out.status.success(), "{sub} --help");
         let text = String::from_utf8_lossy(&out.stdout);
