@@ -82,7 +82,10 @@ impl Checker<'_> {
             other => Err(self.err(
                 table,
                 key,
-                format!("unknown unit {other:?}"),
+                format!(
+                    "unknown unit {other:?}{}",
+                    crate::suggest::did_you_mean(other, ["m", "dm", "cm", "mm"])
+                ),
                 "use one of \"m\", \"dm\", \"cm\", \"mm\"",
             )),
         }

@@ -55,6 +55,9 @@ enum Command {
         checkpoint_every: Option<u32>,
     },
     /// Continue a run from the checkpoint in its output folder (same scene, backend, adapter).
+    #[command(after_help = "Examples:\n  \
+        drapekit run fixtures/scenes/hanging_cloth.toml --checkpoint-every 12 --out out/hang\n  \
+        drapekit resume out/hang --frames 96   # continue, and run to frame 96")]
     Resume {
         /// The run's output folder (holding checkpoint.bin).
         dir: PathBuf,
@@ -142,7 +145,14 @@ enum Command {
 
 /// `drapekit batch MANIFEST --out DIR [...]`, or `drapekit batch report DIR`.
 #[derive(clap::Args)]
-#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+#[command(
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true,
+    after_help = "Examples:\n  \
+        drapekit batch fixtures/datasets/skirts_small.jsonl --out out/skirts_small --backend cpu\n  \
+        drapekit batch fixtures/datasets/skirts_small.jsonl --out out/skirts_small --shard 0/4\n  \
+        drapekit batch report out/skirts_small"
+)]
 struct BatchCli {
     #[command(subcommand)]
     report: Option<BatchCommand>,

@@ -146,7 +146,7 @@ impl Pass {
 }
 
 /// How the plan evaluates dihedral hinges. Both ways exist on both backends (a kernel and its
-/// CPU twin each, with parity tests); each backend takes the one measured faster on it (README,
+/// CPU twin each, with parity tests); each backend takes the one measured faster on it (docs/src/benchmarks/throughput.md,
 /// "Benchmarks"), and the results agree to rounding (bit for bit on the CPU when bending is the
 /// only force after the springs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]

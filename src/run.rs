@@ -76,7 +76,7 @@ pub struct RunOptions {
 
 /// Creates the chosen backend; with `Auto`, falls back to the CPU and returns a note saying why.
 /// `Auto` with `--adapter auto` skips software adapters (`DeviceType::Cpu`): the multi-threaded
-/// CPU path measured faster than lavapipe (README, "Benchmarks"). Naming an adapter, or
+/// CPU path measured faster than lavapipe (docs/src/benchmarks/throughput.md). Naming an adapter, or
 /// `--backend gpu`, still runs it.
 pub fn make_solver(
     prep: &Prepared,
@@ -146,6 +146,30 @@ pub fn adapter_named(adapter: &AdapterChoice) -> bool {
 /// Runs a scene and writes its frames and `summary.json`. Bad input fails before anything is
 /// written. A run that goes non-finite still writes its summary (with `finite: false` and the
 /// error) before returning the error.
+///
+/// ```
+/// use drapekit::gpu::AdapterChoice;
+/// use drapekit::run::{run_scene, BackendChoice, RunOptions};
+/// use drapekit::scene::Scene;
+/// use std::path::Path;
+///
+/// let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+/// let scene = Scene::load(&dir.join("fixtures/scenes/drape_sphere.toml"))?;
+/// let out = std::env::temp_dir().join(format!("drapekit-doc-{}", std::process::id()));
+/// let options = RunOptions {
+///     backend: BackendChoice::Cpu,
+///     adapter: AdapterChoice::Auto,
+///     out_dir: Some(out.clone()),
+///     frames: Some(2),
+///     progress: false,
+///     checkpoint_every: None,
+/// };
+/// let summary = run_scene(&scene, &options)?;
+/// assert!(summary.finite);
+/// assert!(out.join("summary.json").exists() && out.join("frame_0002.obj").exists());
+/// # std::fs::remove_dir_all(&out).ok();
+/// # Ok::<(), drapekit::Error>(())
+/// ```
 pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
     run_scene_from(scene, opts, None)
 }

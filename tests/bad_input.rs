@@ -1,6 +1,7 @@
-//! The bad-input corpus in fixtures/bad/: every file makes `drapekit run` exit with code 2, a
-//! message naming the file, the key (with its line where the format has one) and a fix, no
-//! panic, and no output folder.
+//! The bad-input corpus in fixtures/bad/: every file makes `drapekit run` exit with code 2 (or
+//! the code its `# exit:` line gives: 1 for a folder that cannot be written), a message naming
+//! the file, the key (with its line where the format has one) and a fix, no panic, and no output
+//! folder.
 
 mod common;
 
@@ -16,18 +17,30 @@ fn every_bad_scene_is_refused_cleanly() {
             continue;
         }
         let text = std::fs::read_to_string(&path).unwrap();
-        let expect = text
-            .lines()
-            .next()
-            .and_then(|l| l.strip_prefix("# expect: "))
-            .unwrap_or_else(|| panic!("{} lacks its '# expect: ' line", path.display()));
-        // "# backend: gpu" on the second line: a limit of the GPU path, checked on the
-        // fallback adapter.
-        let gpu = text.lines().nth(1) == Some("# backend: gpu");
+        let header = Header::read(&text);
+        assert!(
+            !header.expect.is_empty(),
+            "{} lacks its '# expect: ' line",
+            path.display()
+        );
+        // "# backend: gpu": a limit of the GPU path, checked on the fallback adapter.
+        let gpu = header.backend.as_deref() == Some("gpu");
         if gpu && common::gpu().is_none() {
             continue;
         }
-        let out = tempdir(&path);
+        // "# out: PATH": the run writes there instead of a fresh folder ({scene} is this file).
+        let given_out = header
+            .out
+            .as_ref()
+            .map(|o| std::path::PathBuf::from(o.replace("{scene}", path.to_str().unwrap())));
+        if given_out
+            .as_ref()
+            .is_some_and(|o| !o.parent().is_some_and(|p| p.exists()))
+        {
+            continue; // e.g. no /sys on this system
+        }
+        let out = given_out.clone().unwrap_or_else(|| tempdir(&path));
+        let existed = out.exists();
         let backend: &[&str] = if gpu {
             &["--backend", "gpu", "--adapter", "fallback"]
         } else {
@@ -43,19 +56,53 @@ fn every_bad_scene_is_refused_cleanly() {
         let name = path.file_name().unwrap().to_str().unwrap();
         assert_eq!(
             result.status.code(),
-            Some(2),
+            Some(header.exit),
             "{name}: exit code; stderr:\n{stderr}"
         );
-        assert!(
-            stderr.contains(expect),
-            "{name}: expected {expect:?} in:\n{stderr}"
-        );
+        for expect in &header.expect {
+            assert!(
+                stderr.contains(expect.as_str()),
+                "{name}: expected {expect:?} in:\n{stderr}"
+            );
+        }
         assert!(stderr.contains("fix:"), "{name}: no fix in:\n{stderr}");
         assert!(!stderr.contains("panicked"), "{name}: panicked:\n{stderr}");
-        assert!(!out.exists(), "{name}: wrote {}", out.display());
+        assert_eq!(out.exists(), existed, "{name}: wrote {}", out.display());
         checked += 1;
     }
     assert!(checked >= 13, "only {checked} bad scenes found");
+}
+
+/// The `# key: value` comment lines that open a corpus scene.
+#[derive(Default)]
+struct Header {
+    /// Texts the error must contain (`# expect:`, one or more).
+    expect: Vec<String>,
+    /// `# backend: gpu` for a limit of the GPU path.
+    backend: Option<String>,
+    /// `# out: PATH`, the output folder to give the run.
+    out: Option<String>,
+    /// `# exit: N`, the exit code (2, bad input, unless given).
+    exit: i32,
+}
+
+impl Header {
+    fn read(text: &str) -> Header {
+        let mut h = Header {
+            exit: 2,
+            ..Header::default()
+        };
+        for line in text.lines().map_while(|l| l.strip_prefix("# ")) {
+            match line.split_once(": ") {
+                Some(("expect", v)) => h.expect.push(v.to_string()),
+                Some(("backend", v)) => h.backend = Some(v.to_string()),
+                Some(("out", v)) => h.out = Some(v.to_string()),
+                Some(("exit", v)) => h.exit = v.parse().expect("# exit: takes a number"),
+                _ => break,
+            }
+        }
+        h
+    }
 }
 
 fn tempdir(scene: &std::path::Path) -> std::path::PathBuf {

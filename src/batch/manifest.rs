@@ -270,7 +270,7 @@ fn load_scene(
         return Ok((Scene::parse(src, path).map_err(|e| e.to_string())?, table));
     }
     overrides::merge(&mut table, overrides, "")
-        .map_err(|e| format!("overrides: {e}\n  fix: see \"overrides\" in README.md"))?;
+        .map_err(|e| format!("overrides: {e}\n  fix: see \"overrides\" in docs/src/batches.md"))?;
     let merged = toml::to_string(&table).map_err(|e| format!("overrides: {e}"))?;
     // Relative paths in the scene (and in overrides) still resolve against the scene file.
     let scene = Scene::parse(&merged, path).map_err(|e| {

@@ -128,7 +128,7 @@ struct FabricArgs {
     #[arg(long, value_delimiter = ',')]
     presets: Vec<String>,
     /// The specimens' integrator: symplectic (converges to the resting shape) or implicit
-    /// (Vertex Block Descent: at a few sweeps per step it does not; see README).
+    /// (Vertex Block Descent: at a few sweeps per step it does not; see docs/src/benchmarks/fabric.md).
     #[arg(long, default_value = "symplectic", value_parser = ["symplectic", "implicit"])]
     integrator: String,
     /// Substeps per frame (default: the stability estimate for symplectic, 4 for implicit).

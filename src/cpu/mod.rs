@@ -133,11 +133,30 @@ pub struct SpatialHash {
 
 impl CpuSolver {
     /// How the CPU evaluates hinges unless the plan says otherwise: once per hinge, measured
-    /// faster here than once per vertex (README, "Benchmarks").
+    /// faster here than once per vertex (docs/src/benchmarks/throughput.md).
     pub const HINGES: HingeEvaluation = HingeEvaluation::Once;
 
     /// A CPU solver for `model` running `plan` (with hinges as `HINGES` if the plan leaves it
     /// open).
+    ///
+    /// ```
+    /// use drapekit::cpu::CpuSolver;
+    /// use drapekit::scene::Scene;
+    /// use drapekit::sim::{prepare, substep_params};
+    /// use drapekit::solver::Solver;
+    /// use std::path::Path;
+    ///
+    /// let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    /// let scene = Scene::load(&dir.join("fixtures/scenes/free_fall.toml"))?;
+    /// let prep = prepare(&scene)?;
+    /// let mut solver = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    /// // One output frame: its substeps in one call, then read the state back.
+    /// solver.advance(&substep_params(&prep, 0))?;
+    /// let state = solver.state()?;
+    /// // Falling from rest: everything moves down.
+    /// assert!(state.velocities.iter().all(|v| v.y < 0.0));
+    /// # Ok::<(), drapekit::Error>(())
+    /// ```
     pub fn new(model: &ClothModel, params: SimParams, plan: &PassPlan) -> Self {
         let plan = &plan.for_backend(Self::HINGES);
         let n = model.len();

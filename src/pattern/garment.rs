@@ -26,7 +26,7 @@ pub struct GarmentOptions {
     pub placement: HashMap<String, Placement>,
 }
 
-/// A seam vertex and its partner point on the other edge: (1 − w)·x[b[0]] + w·x[b[1]].
+/// A seam vertex and its partner point on the other edge: `(1 − w)·x[b[0]] + w·x[b[1]]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SeamPair {
     /// The seam vertex.

@@ -65,7 +65,7 @@ pub const DEFAULT_SETTLE_FORCE_RESIDUAL: f32 = 0.05;
 pub const DEFAULT_SMOOTHING_SWEEPS: u32 = 2;
 
 /// The default of `[solver] strain_limit`: 10% over rest length. Woven fabrics reach about 5%
-/// only at the 500 gf/cm load of the KES tensile test (README, "Strain limiting").
+/// only at the 500 gf/cm load of the KES tensile test (docs/src/stability.md, "Strain limiting").
 pub const DEFAULT_STRAIN_LIMIT: f32 = 0.1;
 
 /// Output settings.

@@ -481,6 +481,27 @@ fn release(
 /// Runs `prep.frames` output frames on `solver`, calling `on_frame` with each finite frame
 /// (frame 0 is the initial state). A non-finite frame stops the run with an error naming the
 /// frame and the first bad particle; `on_frame` never sees it.
+///
+/// ```
+/// use drapekit::cpu::CpuSolver;
+/// use drapekit::scene::Scene;
+/// use drapekit::sim::{prepare, simulate, RunStats};
+/// use std::path::Path;
+///
+/// let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+/// let mut scene = Scene::load(&dir.join("fixtures/scenes/hanging_cloth.toml"))?;
+/// scene.solver.frames = 3;
+/// let prep = prepare(&scene)?;
+/// let mut solver = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+/// let mut lowest = Vec::new();
+/// simulate(&prep, &mut solver, &mut RunStats::default(), |frame, state| {
+///     lowest.push((frame, state.positions.iter().map(|p| p.y).fold(f32::MAX, f32::min)));
+///     Ok(())
+/// })?;
+/// assert_eq!(lowest.len(), 4); // frame 0 (the start) and frames 1 to 3
+/// assert!(lowest[3].1 < lowest[0].1); // the cloth sags
+/// # Ok::<(), drapekit::Error>(())
+/// ```
 pub fn simulate(
     prep: &Prepared,
     solver: &mut dyn Solver,
