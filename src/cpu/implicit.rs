@@ -193,15 +193,28 @@ impl Vbd {
         prev: &[Vec4],
         sdfs: &[&[f32]],
     ) {
-        let elements = self.elements.clone();
-        let el = elements.view();
         if let Some(c) = &mut self.newton {
             c.alphas.clear();
         }
         self.history.clear();
-        let mut swept = 0;
         let schedule = self.schedule.clone();
-        for op in schedule {
+        self.run_ops(&schedule, params, step, prev, sdfs);
+    }
+
+    /// Runs `ops` in order on the current iterate (a whole schedule, or part of one for
+    /// benchmarks and tests), until they end or a tolerance check finds the solve converged.
+    pub fn run_ops(
+        &mut self,
+        ops: &[SolveOp],
+        params: &SimParams,
+        step: &SubstepParams,
+        prev: &[Vec4],
+        sdfs: &[&[f32]],
+    ) {
+        let elements = self.elements.clone();
+        let el = elements.view();
+        let mut swept = self.history.last().map_or(0, |h| h.0);
+        for &op in ops {
             let started = self.profile.is_some().then(std::time::Instant::now);
             self.run_op(op, params, step, prev, sdfs, &el, &mut swept);
             if let (Some(t), Some(p)) = (started, &mut self.profile) {

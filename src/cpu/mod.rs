@@ -397,6 +397,19 @@ impl CpuSolver {
 }
 
 impl CpuSolver {
+    /// Runs implicit Euler's solve operations `ops` on the current iterate, from the current
+    /// state (after `vbd_init`): part of a substep's schedule, for benchmarks and tests.
+    /// Panics without implicit Euler in the plan.
+    pub fn run_solve_ops(&mut self, ops: &[crate::plan::SolveOp], step: &SubstepParams) {
+        let v = self
+            .vbd
+            .as_mut()
+            .expect("implicit Euler is not in the plan");
+        let sdfs: Vec<&[f32]> = self.colliders.iter().map(|c| &c.sdf.values[..]).collect();
+        let (params, pos) = (&self.params, &self.pos);
+        rayon::scope(|_| v.run_ops(ops, params, step, pos, &sdfs));
+    }
+
     /// Switches self-collision to the point–triangle impulse reference (CPU only).
     pub fn use_point_triangle_reference(&mut self) {
         self.point_triangle_reference = true;
