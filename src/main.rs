@@ -357,6 +357,14 @@ fn execute(command: Command) -> Result<(), Error> {
                 "dt": prep.params.dt,
                 "stable_dt_estimate_s": prep.stable_dt,
                 "dt_limited_by": prep.dt_limited_by,
+                "implicit_solve": prep.plan.contains(drapekit::plan::Pass::VbdSolve).then(|| {
+                    let shape = drapekit::plan::SolveShape::for_run(&prep.model, &prep.params, &prep.plan);
+                    serde_json::json!({
+                        "shape": shape,
+                        "level_particles": prep.model.multigrid.as_ref().map(|m| m.sizes()),
+                        "operations_per_substep": drapekit::plan::implicit_schedule(shape).len(),
+                    })
+                }),
             });
             if json {
                 println!(
@@ -390,6 +398,9 @@ fn execute(command: Command) -> Result<(), Error> {
                         pass.name(),
                         pass.name()
                     );
+                }
+                if prep.plan.contains(drapekit::plan::Pass::VbdSolve) {
+                    println!("  {}", describe_solve(&prep));
                 }
             }
             Ok(())
@@ -525,5 +536,29 @@ fn stop_on_ctrl_c() {
     });
     if let Err(e) = installed {
         eprintln!("drapekit: warning: Ctrl-C will not write a checkpoint: {e}");
+    }
+}
+
+/// How implicit Euler solves each substep, in one line for `drapekit plan`.
+fn describe_solve(prep: &drapekit::sim::Prepared) -> String {
+    let shape = drapekit::plan::SolveShape::for_run(&prep.model, &prep.params, &prep.plan);
+    match &prep.model.multigrid {
+        None => format!(
+            "implicit solve: {} Vertex Block Descent sweeps per substep",
+            shape.iterations
+        ),
+        Some(m) => {
+            let levels: Vec<String> = m.sizes().iter().map(|n| n.to_string()).collect();
+            format!(
+                "implicit solve: {} Newton step(s) per substep, each after {} sweeps: conjugate \
+                 gradients ({} iterations) preconditioned by a multigrid V-cycle over {} \
+                 particles, then a line search; {} final sweeps",
+                shape.iterations,
+                shape.smoothing,
+                shape.linear_iterations,
+                levels.join(" → "),
+                shape.smoothing
+            )
+        }
     }
 }

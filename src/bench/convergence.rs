@@ -4,7 +4,9 @@
 //!
 //! The scene runs on the CPU at its own spacing to a representative frame (until it settles, or
 //! `--frames`); that state is carried onto the finer meshings through the pattern (or grid)
-//! coordinates, as the coarse start does, and every method then solves the next substep from it.
+//! coordinates, as the coarse start does, the finer mesh runs `relax_frames` frames from it
+//! (the carried state's chords and penetrations are not what a run at that spacing meets), and
+//! every method then solves the next substep from the same state.
 //! Cost is counted in fine-sweep equivalents: the method's wall time over that of one Vertex
 //! Block Descent sweep of the same mesh, measured in the same run.
 
@@ -37,6 +39,8 @@ pub struct ConvergenceOptions {
     pub max_sweeps: u32,
     /// The most Newton steps.
     pub max_newton: u32,
+    /// Frames a finer mesh runs from the carried state before its measured substep.
+    pub relax_frames: u32,
 }
 
 /// One point of a method's curve.
@@ -70,7 +74,9 @@ pub fn run_cli(opts: &ConvergenceOptions) -> Result<Vec<ConvergenceRow>, Error> 
         let fine = refined(&scene, r);
         let prep = prepare(&fine)?;
         let mapped = map_state(&scene, &base, &state, &fine, &prep)?;
-        rows.extend(measure(&prep, &mapped, &stats, frame, r, opts)?);
+        let relax = if r == 1 { 0 } else { opts.relax_frames };
+        let (relaxed, at) = continue_run(&prep, mapped, &stats, frame, relax)?;
+        rows.extend(measure(&prep, &relaxed, &stats, at, r, opts)?);
     }
     std::fs::create_dir_all(&opts.out).map_err(|e| Error::io(&opts.out, e))?;
     write_atomic(&opts.out.join("convergence.csv"), csv(&rows).as_bytes())?;
@@ -142,6 +148,27 @@ fn representative_state(
     })?;
     let frame = stats.frames_run;
     Ok((prep, last, stats, frame))
+}
+
+/// `frames` more frames of `prep` from `state` at the end of frame `frame`: the state then, and
+/// the frame.
+fn continue_run(
+    prep: &Prepared,
+    state: ParticleState,
+    stats: &RunStats,
+    frame: u32,
+    frames: u32,
+) -> Result<(ParticleState, u32), Error> {
+    if frames == 0 {
+        return Ok((state, frame));
+    }
+    let params = phase_params(prep, frame, stats);
+    let mut solver = CpuSolver::new(&prep.model, params, &prep.plan);
+    solver.set_state(&state);
+    for f in frame + 1..=frame + frames {
+        solver.advance(&substep_params(prep, f))?;
+    }
+    Ok((solver.state()?, frame + frames))
 }
 
 /// The cloth's chart coordinates (pattern panels or grid plane).

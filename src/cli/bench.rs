@@ -89,9 +89,9 @@ struct ConvergenceArgs {
     /// Output folder for convergence.csv, convergence.md and convergence.svg.
     #[arg(long)]
     out: PathBuf,
-    /// Frames to run before the measured substep (default: until the scene settles, at most
-    /// its frames; 12 with --quick).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Frames to run before the measured substep: 0 measures the scene's first substep from its
+    /// initial state (default: until the scene settles, at most its frames; 12 with --quick).
+    #[arg(long)]
     frames: Option<u32>,
     /// Spacing divisors (default 1,2,4; 1,2 with --quick).
     #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=8))]
@@ -99,6 +99,9 @@ struct ConvergenceArgs {
     /// The most plain sweeps (default 1024; 64 with --quick).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     max_sweeps: Option<u32>,
+    /// Frames a finer mesh runs from the carried state before its measured substep.
+    #[arg(long, default_value_t = 2)]
+    relax_frames: u32,
     /// The most Newton steps (default 12; 3 with --quick).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     max_newton: Option<u32>,
@@ -319,6 +322,7 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
                     },
                     max_sweeps: c.max_sweeps.unwrap_or(quick(1024, 64)),
                     max_newton: c.max_newton.unwrap_or(quick(12, 3)),
+                    relax_frames: c.relax_frames,
                     scene: c.scene,
                     out: c.out,
                 },
