@@ -126,3 +126,34 @@ pub struct Summary {
     /// Files written, relative to the output folder.
     pub outputs: Vec<String>,
 }
+
+impl Summary {
+    /// The fields (dotted paths) holding a non-finite number. JSON has no NaN: serde_json would
+    /// write one as `null`, which reads as "not applicable", so a run checks this before
+    /// writing. The summary goes through a TOML value, which keeps NaN and infinities, so that
+    /// every field is covered, also ones added later.
+    pub fn non_finite_fields(&self) -> Vec<String> {
+        fn walk(v: &toml::Value, at: &str, out: &mut Vec<String>) {
+            match v {
+                toml::Value::Float(x) if !x.is_finite() => out.push(at.to_string()),
+                toml::Value::Array(items) => (items.iter().enumerate())
+                    .for_each(|(i, item)| walk(item, &format!("{at}[{i}]"), out)),
+                toml::Value::Table(t) => t.iter().for_each(|(k, item)| {
+                    let path = if at.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{at}.{k}")
+                    };
+                    walk(item, &path, out)
+                }),
+                _ => {}
+            }
+        }
+        let mut out = Vec::new();
+        match toml::Value::try_from(self) {
+            Ok(v) => walk(&v, "", &mut out),
+            Err(e) => out.push(format!("(the summary could not be checked: {e})")),
+        }
+        out
+    }
+}

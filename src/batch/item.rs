@@ -73,7 +73,7 @@ impl Failure {
             Error::Input(_) => "bad_input",
             Error::Unstable(_) => "unstable",
             Error::Gpu(_) => "gpu",
-            Error::Io { .. } => "io",
+            Error::Io { .. } | Error::Write { .. } => "io",
             _ => "other",
         };
         Failure {

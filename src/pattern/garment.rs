@@ -135,8 +135,12 @@ impl Garment {
                     options.particle_distance,
                     panel.edges[ei].curve.length() / unit
                 ),
-                "check the edge's vertices and curvature control points, and the pattern's \
-                 units_in_meter, or use a coarser particle_distance_m",
+                &format!(
+                    "check the edge's vertices and curvature control points, and the \
+                     pattern's units_in_meter, or use particle_distance_m = {:.4} or more \
+                     (outline particles fall in proportion)",
+                    options.particle_distance * total as f64 / MAX_OUTLINE_PARTICLES as f64
+                ),
             ));
         }
         let mut positions = Vec::new();

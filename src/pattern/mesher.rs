@@ -2,6 +2,8 @@
 //! target edge length and a minimum angle, without adding points on the outline.
 
 use glam::DVec2;
+use rstar::primitives::{GeomWithData, Rectangle};
+use rstar::{RTree, AABB};
 use spade::{
     AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
 };
@@ -18,35 +20,55 @@ pub struct PanelMesh {
     pub triangles: Vec<[u32; 3]>,
 }
 
-/// Segments `i` and `j` of a closed polyline that cross, if any (adjacent segments share only
-/// their common point and do not count).
+/// Segments `i < j` of a closed polyline that cross or touch, the first in (i, j) order, if
+/// any (adjacent segments share only their common point and do not count). An R-tree over the
+/// segments' bounding boxes offers each segment only the segments whose boxes meet its own, so
+/// an outline of n samples costs O(n log n) plus those candidate pairs: on a sampled outline
+/// the segments are no longer than the particle spacing, and only neighbours along the outline
+/// (or a crossing) meet. The orientation tests are exact (Shewchuk's predicates).
 pub fn first_crossing(outline: &[DVec2]) -> Option<(usize, usize)> {
     let n = outline.len();
-    let seg = |i: usize| (outline[i], outline[(i + 1) % n]);
-    let orient = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a);
-    for i in 0..n {
-        let (a, b) = seg(i);
-        let (lo_a, hi_a) = (a.min(b), a.max(b));
-        for j in i + 2..n {
-            if i == 0 && j == n - 1 {
-                continue; // the closing segment is adjacent to the first
-            }
-            let (c, d) = seg(j);
-            if hi_a.x < c.x.min(d.x)
-                || lo_a.x > c.x.max(d.x)
-                || hi_a.y < c.y.min(d.y)
-                || lo_a.y > c.y.max(d.y)
-            {
-                continue;
-            }
-            let (d1, d2) = (orient(a, b, c), orient(a, b, d));
-            let (d3, d4) = (orient(c, d, a), orient(c, d, b));
-            if d1 * d2 <= 0.0 && d3 * d4 <= 0.0 {
-                return Some((i, j));
-            }
-        }
+    // A non-finite point has no place in the tree; the triangulation refuses it by name.
+    if n < 4 || outline.iter().any(|p| !p.is_finite()) {
+        return None;
     }
-    None
+    let seg = |i: usize| (outline[i], outline[(i + 1) % n]);
+    let bounds = |i: usize| {
+        let (a, b) = seg(i);
+        ([a.x.min(b.x), a.y.min(b.y)], [a.x.max(b.x), a.y.max(b.y)])
+    };
+    let boxes = (0..n)
+        .map(|i| {
+            let (lo, hi) = bounds(i);
+            GeomWithData::new(Rectangle::from_corners(lo, hi), i)
+        })
+        .collect();
+    let tree = RTree::bulk_load(boxes);
+    let adjacent = |i: usize, j: usize| j == i + 1 || (i == 0 && j == n - 1);
+    (0..n).find_map(|i| {
+        let (a, b) = seg(i);
+        let (lo, hi) = bounds(i);
+        (tree.locate_in_envelope_intersecting(AABB::from_corners(lo, hi)))
+            .map(|other| other.data)
+            .filter(|&j| j > i && !adjacent(i, j))
+            .filter(|&j| {
+                let (c, d) = seg(j);
+                segments_meet(a, b, c, d)
+            })
+            .min()
+            .map(|j| (i, j))
+    })
+}
+
+/// Whether segments ab and cd, whose bounding boxes overlap, share a point: each one's ends lie
+/// on both sides of (or on) the other's line. Collinear segments meet where their boxes do.
+fn segments_meet(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    let orient = |p: DVec2, q: DVec2, r: DVec2| {
+        let coord = |v: DVec2| robust::Coord { x: v.x, y: v.y };
+        let o = robust::orient2d(coord(p), coord(q), coord(r));
+        (o > 0.0) as i8 - (o < 0.0) as i8
+    };
+    orient(a, b, c) * orient(a, b, d) <= 0 && orient(c, d, a) * orient(c, d, b) <= 0
 }
 
 /// Triangulates the region inside `outline` (a simple closed polygon, either orientation) with
@@ -106,4 +128,96 @@ pub fn triangulate(outline: &[DVec2], target: f64) -> Result<PanelMesh, String> 
 pub fn min_angle_deg(a: DVec2, b: DVec2, c: DVec2) -> f64 {
     let angle = |p: DVec2, q: DVec2, r: DVec2| (q - p).angle_to(r - p).abs().to_degrees();
     angle(a, b, c).min(angle(b, c, a)).min(angle(c, a, b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The definition `first_crossing` must agree with: every pair, in (i, j) order.
+    fn brute_force(outline: &[DVec2]) -> Option<(usize, usize)> {
+        let n = outline.len();
+        let seg = |i: usize| (outline[i], outline[(i + 1) % n]);
+        for i in 0..n {
+            for j in i + 2..n {
+                if i == 0 && j == n - 1 {
+                    continue;
+                }
+                let ((a, b), (c, d)) = (seg(i), seg(j));
+                let boxes_meet = a.min(b).cmple(c.max(d)).all() && c.min(d).cmple(a.max(b)).all();
+                if boxes_meet && segments_meet(a, b, c, d) {
+                    return Some((i, j));
+                }
+            }
+        }
+        None
+    }
+
+    fn circle(n: usize) -> Vec<DVec2> {
+        (0..n)
+            .map(|k| {
+                let a = std::f64::consts::TAU * k as f64 / n as f64;
+                DVec2::new(a.cos(), a.sin())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn agrees_with_every_pair_on_random_polygons() {
+        // Random star-ish and scrambled polygons: some simple, most crossing.
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut crossing, mut simple) = (0, 0);
+        for trial in 0..400 {
+            let n = 4 + trial % 20;
+            let mut pts: Vec<DVec2> = circle(n).into_iter().map(|p| p * (0.3 + next())).collect();
+            if trial % 3 == 0 {
+                let (i, j) = ((next() * n as f64) as usize, (next() * n as f64) as usize);
+                pts.swap(i.min(n - 1), j.min(n - 1));
+            }
+            if trial % 7 == 0 {
+                // A vertex exactly on another segment: touching counts.
+                pts[n - 1] = 0.5 * (pts[2] + pts[3]);
+            }
+            let expect = brute_force(&pts);
+            assert_eq!(first_crossing(&pts), expect, "trial {trial}: {pts:?}");
+            match expect {
+                Some(_) => crossing += 1,
+                None => simple += 1,
+            }
+        }
+        assert!(
+            crossing > 50 && simple > 50,
+            "{crossing} crossing, {simple} simple"
+        );
+    }
+
+    #[test]
+    fn a_bow_tie_crosses_and_a_square_does_not() {
+        let square = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].map(DVec2::from);
+        assert_eq!(first_crossing(&square), None);
+        let bow_tie = [(0.0, 0.0), (1.0, 1.0), (1.0, 0.0), (0.0, 1.0)].map(DVec2::from);
+        assert_eq!(first_crossing(&bow_tie), Some((0, 2)));
+    }
+
+    #[test]
+    fn a_long_simple_outline_takes_well_under_a_second() {
+        // Testing every pair of 200,000 segments (the old test) took about 20 s; the R-tree
+        // offers each segment its two neighbours, so this is a fraction of a second even in a
+        // loaded test run. A crossing added at the end is still found.
+        let mut pts = circle(200_000);
+        let start = std::time::Instant::now();
+        assert_eq!(first_crossing(&pts), None);
+        let elapsed = start.elapsed().as_secs_f64();
+        assert!(elapsed < 1.0, "took {elapsed} s");
+        let last = pts.len() - 1;
+        pts[last] = DVec2::new(0.5, -2.0);
+        let (i, j) = first_crossing(&pts).expect("a spike through the circle crosses it");
+        assert!(j >= last - 1, "({i}, {j})");
+    }
 }
