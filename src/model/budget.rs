@@ -344,8 +344,8 @@ fn too_many(scene: &Scene, particles: u64, fits: u64, problem: String, or: &str)
 /// unit slip (a sock is about 20 cm, a gown about 2 m): 5 cm and 5 m.
 pub const GARMENT_SIZE_RANGE_M: (f64, f64) = (0.05, 5.0);
 
-/// A panel's farthest reach from the origin once placed, in m: its corners placed in 3D,
-/// plus its outline's length (no point of a curve lies farther from a corner than that).
+/// Each panel's farthest reach from the origin once placed, in m, and its placed bounding box:
+/// the box of its outline's curves (`Curve::bounds`) carried into 3D.
 fn panel_reach(pattern: &Pattern, options: &GarmentOptions) -> Vec<(f64, [DVec3; 2])> {
     let unit = pattern.units_in_meter;
     (pattern.panels.iter())
@@ -358,17 +358,20 @@ fn panel_reach(pattern: &Pattern, options: &GarmentOptions) -> Vec<(f64, [DVec3;
                 }
                 None => (panel.rotation(), panel.translation),
             };
-            let corners: Vec<DVec3> = (panel.vertices.iter())
-                .map(|v| (rotation * DVec3::new(v.x, v.y, 0.0) + translation) / unit)
-                .collect();
+            let (lo2, hi2) = (panel.edges.iter()).map(|e| e.curve.bounds()).fold(
+                (glam::DVec2::INFINITY, glam::DVec2::NEG_INFINITY),
+                |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
+            );
+            let corners = [
+                (lo2.x, lo2.y),
+                (hi2.x, lo2.y),
+                (lo2.x, hi2.y),
+                (hi2.x, hi2.y),
+            ]
+            .map(|(x, y)| (rotation * DVec3::new(x, y, 0.0) + translation) / unit);
             let lo = corners.iter().fold(DVec3::INFINITY, |a, &b| a.min(b));
             let hi = corners.iter().fold(DVec3::NEG_INFINITY, |a, &b| a.max(b));
-            let outline: f64 = panel.edges.iter().map(|e| e.curve.length()).sum::<f64>() / unit;
-            let far = corners
-                .iter()
-                .map(|c| c.abs().max_element())
-                .fold(0.0, f64::max);
-            (far + outline, [lo, hi])
+            (lo.abs().max(hi.abs()).max_element(), [lo, hi])
         })
         .collect()
 }
@@ -390,9 +393,9 @@ fn check_pattern_scale(scene: &Scene) -> Result<(), InputError> {
                 format!("panel '{}'", panel.name),
                 format!(
                     "reaches {reach:.3e} m from the origin once placed (units_in_meter = {}): \
-                     32-bit positions cannot resolve a {spacing} m particle spacing beyond \
+                     32-bit positions cannot resolve a {} m particle spacing beyond \
                      {limit:.3e} m",
-                    pattern.units_in_meter
+                    pattern.units_in_meter, spacing as f32
                 ),
                 "check the panel's vertices, curvature control points and translation, and \
                  the pattern's units_in_meter",
