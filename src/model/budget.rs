@@ -178,6 +178,15 @@ pub fn check_budget(scene: &Scene) -> Result<(), InputError> {
     ))
 }
 
+/// The particles the memory cap leaves room for, beside the bodies' SDFs.
+pub fn particle_budget(scene: &Scene) -> Result<usize, InputError> {
+    let (cap, _) = memory_cap(scene);
+    let sdf: u64 = sdf_bytes(scene)?
+        .iter()
+        .fold(0, |a, b| a.saturating_add(b.1));
+    Ok((cap.saturating_sub(sdf) / BYTES_PER_PARTICLE).min(usize::MAX as u64) as usize)
+}
+
 /// Each body's SDF size in bytes (body index, bytes), from its mesh's bounding box before
 /// anything is baked.
 fn sdf_bytes(scene: &Scene) -> Result<Vec<(usize, u64)>, InputError> {

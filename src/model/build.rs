@@ -93,7 +93,9 @@ impl Scene {
             return Ok(None);
         };
         let pattern = Pattern::load(path)?;
-        Ok(Some(Garment::build(&pattern, options)?))
+        // The particles the memory cap leaves room for: the mesher stops there.
+        let budget = super::budget::particle_budget(self)?;
+        Ok(Some(Garment::build_within(&pattern, options, budget)?))
     }
 
     /// The particles each pin entry selects; an entry that selects nothing is an error.
