@@ -54,10 +54,9 @@ pub fn remove_stale_temporaries(dir: &Path) -> Vec<String> {
     let mut removed = Vec::new();
     for entry in entries.flatten() {
         let name = entry.file_name().to_string_lossy().into_owned();
-        if is_temporary(&name) && entry.file_type().is_ok_and(|t| t.is_file()) {
-            if std::fs::remove_file(entry.path()).is_ok() {
-                removed.push(name);
-            }
+        let temporary = is_temporary(&name) && entry.file_type().is_ok_and(|t| t.is_file());
+        if temporary && std::fs::remove_file(entry.path()).is_ok() {
+            removed.push(name);
         }
     }
     removed.sort();

@@ -172,7 +172,8 @@ fn mutate(v: &mut Value, rng: &mut Rng) -> Option<String> {
         }
         // Swap the value for another type.
         1 => {
-            *at_mut(v, &path)? = serde_json::from_str(*rng.pick(OTHER_TYPES)).unwrap();
+            let other = OTHER_TYPES[rng.below(OTHER_TYPES.len())];
+            *at_mut(v, &path)? = serde_json::from_str(other).unwrap();
             None
         }
         // An extreme or non-finite number (as raw text).

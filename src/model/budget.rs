@@ -396,7 +396,8 @@ fn check_pattern_scale(scene: &Scene) -> Result<(), InputError> {
     let spacing = options.particle_distance;
     let limit = hi.min(spacing / MIN_EDGE_PER_COORDINATE);
     for (panel, (reach, _)) in pattern.panels.iter().zip(panel_reach(&pattern, options)) {
-        if !(reach <= limit) {
+        // NaN counts as too far.
+        if reach.is_nan() || reach > limit {
             return Err(InputError::new(
                 path,
                 format!("panel '{}'", panel.name),
