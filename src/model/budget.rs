@@ -441,3 +441,76 @@ pub fn load_warnings(scene: &Scene) -> Vec<String> {
     }
     out
 }
+
+/// Refuses a built cloth mesh whose derived quantities, computed in f64, fall outside what the
+/// solver's f32 arithmetic holds (`scene::limits`): its largest coordinate, its shortest edge
+/// (also against that coordinate), its lightest particle, its stiffest spring and its fastest
+/// oscillation. The scene's own check sees a grid or a pattern before it is built; an OBJ
+/// cloth is seen here first, and every cloth passes here once more before it becomes f32.
+pub fn check_mesh_scale(scene: &Scene, mesh: &crate::mesh::TriMesh) -> Result<(), InputError> {
+    let p = |i: u32| mesh.positions[i as usize].as_dvec3();
+    let reach = (mesh.positions.iter())
+        .map(|v| v.as_dvec3().abs().max_element())
+        .fold(0.0, f64::max);
+    let mut area = vec![0.0f64; mesh.positions.len()];
+    let (mut edge, mut stiffness) = (f64::INFINITY, 0.0f64);
+    for t in &mesh.triangles {
+        let a = 0.5 * (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length();
+        for k in 0..3 {
+            area[t[k] as usize] += a / 3.0;
+            let l = p(t[k]).distance(p(t[(k + 1) % 3]));
+            if l > 0.0 {
+                edge = edge.min(l);
+                // k = Y·ΣA/L², summed over the edge's one or two triangles.
+                stiffness = stiffness.max(2.0 * a / (l * l));
+            }
+        }
+    }
+    let density = scene.fabric.density as f64;
+    let mass = (area.iter().filter(|&&a| a > 0.0)).fold(f64::INFINITY, |m, &a| m.min(a * density));
+    let stiffness = stiffness * scene.fabric.stretch_stiffness as f64;
+    let omega = (2.0 * 8.0 * stiffness / mass).sqrt();
+    let (table, key) = match &scene.cloth {
+        ClothSource::Grid { .. } => ("cloth.grid", "width_m"),
+        ClothSource::Pattern { .. } => ("cloth.pattern", "particle_distance_m"),
+        ClothSource::Mesh { .. } => ("cloth.mesh", "path"),
+    };
+    let (lo, hi) = SAFE_MAGNITUDE;
+    let quantities = [
+        ("largest coordinate", reach, "m"),
+        ("shortest edge", edge, "m"),
+        ("lightest particle's mass", mass, "kg"),
+        ("stiffest spring", stiffness, "N/m"),
+        ("fastest oscillation", omega, "rad/s"),
+    ];
+    for (what, v, unit) in quantities {
+        // An empty or flat mesh has no edge or mass to check: other checks refuse it.
+        if v.is_infinite() && (what == "shortest edge" || what.contains("mass")) {
+            continue;
+        }
+        if !(v.is_finite() && (v == 0.0 || (lo..=hi).contains(&v))) {
+            return Err(scene.error(
+                table,
+                key,
+                format!(
+                    "the cloth's {what} would be {v:.3e} {unit}, outside {lo:e} to {hi:e} \
+                     {unit}, the range the solver's 32-bit arithmetic holds"
+                ),
+                "check the cloth's size and units (a mesh's units key), the fabric's \
+                 density_kg_m2 and stretch_stiffness_n_m",
+            ));
+        }
+    }
+    if edge.is_finite() && edge < MIN_EDGE_PER_COORDINATE * reach {
+        return Err(scene.error(
+            table,
+            key,
+            format!(
+                "edges of {edge:.3e} m at coordinates up to {reach:.3e} m: 32-bit positions \
+                 there are too coarse to resolve a 1% strain of such an edge"
+            ),
+            "move the cloth nearer the origin, or use a mesh with longer edges",
+        ));
+    }
+    Ok(())
+}

@@ -167,6 +167,7 @@ impl Scene {
             Some(g) => g.mesh.clone(),
             None => self.build_mesh()?,
         };
+        super::budget::check_mesh_scale(self, &mesh)?;
         let scene_pins = self.pinned_particles(&mesh)?;
         let attached = match &garment {
             Some(g) => self.attached_particles(g)?,
