@@ -20,9 +20,9 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-/// Inputs CI runs (about 20 s on two cores); a longer run:
+/// Inputs CI runs (about 40 s on two cores); a longer run:
 /// DRAPEKIT_FUZZ_PATTERNS=100000 cargo test --release --test fuzz_patterns.
-const DEFAULT_INPUTS: usize = 2000;
+const DEFAULT_INPUTS: usize = 3000;
 
 /// The most one input may take. The fuzz scene meshes at 5 cm under a 64 MiB cap: at most
 /// about 50,000 particles, whose load, plan and implicit frame take about a second here; ten
@@ -138,6 +138,10 @@ fn panels(v: &mut Value) -> Option<&mut serde_json::Map<String, Value>> {
 /// `(placeholder value, raw text)` to splice in after serialising.
 fn mutate(v: &mut Value, rng: &mut Rng) -> Option<String> {
     let all = paths(v);
+    if all.len() < 2 {
+        // Nothing left below the root (earlier mutations emptied it).
+        return None;
+    }
     let path = all[1 + rng.below(all.len() - 1)].clone();
     // Number mutations pick among the numbers, so that the structure survives them.
     let numbers: Vec<&Vec<String>> = (all.iter())
@@ -379,7 +383,17 @@ fn mutated_patterns_have_no_defect() {
                             Rng(0x5eed_9a77_e400_0001
                                 ^ (k as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
                         let (path, original) = &patterns[k % patterns.len()];
-                        let text = mutated_text(original, &mut rng);
+                        // A bug in the mutator fails the test with its input number (the
+                        // panic hook is quiet here, so it is reported like a defect).
+                        let mutated =
+                            catch_unwind(AssertUnwindSafe(|| mutated_text(original, &mut rng)));
+                        let Ok(text) = mutated else {
+                            defects.push(format!("the mutator panicked on input {k}: a test bug"));
+                            continue;
+                        };
+                        if t == 0 && k % 10_000 < threads {
+                            eprintln!("fuzzing input {k} of {inputs}");
+                        }
                         let start = Instant::now();
                         let outcome = catch_unwind(AssertUnwindSafe(|| exercise(&text, &work)))
                             .unwrap_or_else(|_| Err("panicked".into()));

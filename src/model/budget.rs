@@ -108,7 +108,8 @@ fn pattern_estimate(path: &Path, spacing: f64) -> Result<(f64, f64, f64), InputE
 
 /// Refuses (bad input, naming the key to change and a value that fits) a scene whose estimated
 /// particles and collision SDFs together need more memory than the cap (`memory_cap`).
-pub fn check_budget(scene: &Scene) -> Result<(), InputError> {
+/// Returns the particles the cap leaves room for beside the SDFs (the mesher stops there).
+pub fn check_budget(scene: &Scene) -> Result<usize, InputError> {
     check_pattern_scale(scene)?;
     let (cap, cap_said) = memory_cap(scene);
     let sdfs = sdf_bytes(scene)?;
@@ -137,8 +138,9 @@ pub fn check_budget(scene: &Scene) -> Result<(), InputError> {
             ));
         }
     }
+    let room = (cap.saturating_sub(sdf_total) / BYTES_PER_PARTICLE).min(usize::MAX as u64);
     if need <= cap {
-        return Ok(());
+        return Ok(room as usize);
     }
     if sdf_total > cloth {
         // The bodies' grids are the larger part: coarsen the largest.
@@ -176,15 +178,6 @@ pub fn check_budget(scene: &Scene) -> Result<(), InputError> {
         problem,
         "or raise solver.max_memory_mb",
     ))
-}
-
-/// The particles the memory cap leaves room for, beside the bodies' SDFs.
-pub fn particle_budget(scene: &Scene) -> Result<usize, InputError> {
-    let (cap, _) = memory_cap(scene);
-    let sdf: u64 = sdf_bytes(scene)?
-        .iter()
-        .fold(0, |a, b| a.saturating_add(b.1));
-    Ok((cap.saturating_sub(sdf) / BYTES_PER_PARTICLE).min(usize::MAX as u64) as usize)
 }
 
 /// Each body's SDF size in bytes (body index, bytes), from its mesh's bounding box before
