@@ -92,6 +92,16 @@ fn a_full_tmpfs_mid_run_leaves_nothing_and_resume_finishes() {
     let Some(disk) = mount_tmpfs(12) else {
         return;
     };
+    // Unmounted whatever happens below.
+    let outcome = std::panic::catch_unwind(|| fill_mid_run_then_resume(&disk));
+    let _ = Command::new("umount").arg(&disk).status();
+    let _ = std::fs::remove_dir(&disk);
+    if let Err(p) = outcome {
+        std::panic::resume_unwind(p);
+    }
+}
+
+fn fill_mid_run_then_resume(disk: &Path) {
     let out = disk.join("out");
     let scene = common::fixture("scenes/hanging_cloth.toml");
     // 60 frames of about 100 KB fit 12 MiB, so the run starts; once its fourth frame is on
@@ -132,11 +142,7 @@ fn a_full_tmpfs_mid_run_leaves_nothing_and_resume_finishes() {
     }
     let result = run.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&result.stderr);
-    let umount = || {
-        let _ = Command::new("umount").arg(&disk).status();
-        let _ = std::fs::remove_dir(&disk);
-    };
-    let checks = || {
+    {
         assert_eq!(result.status.code(), Some(1), "{stderr}");
         let error = stderr
             .lines()
@@ -159,10 +165,5 @@ fn a_full_tmpfs_mid_run_leaves_nothing_and_resume_finishes() {
         assert_eq!(resumed.status.code(), Some(0), "{stderr}");
         assert!(temporaries(&out).is_empty(), "{:?}", temporaries(&out));
         assert!(out.join("frame_0060.obj").is_file());
-    };
-    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(checks));
-    umount();
-    if let Err(p) = outcome {
-        std::panic::resume_unwind(p);
     }
 }
