@@ -247,6 +247,68 @@ mod tests {
         );
     }
 
+    /// A needle: out along y = 0 and back along y = width, `n` points in all.
+    fn needle(n: usize, length: f64, width: f64) -> Vec<DVec2> {
+        let half = n / 2;
+        let out = (0..half).map(|k| DVec2::new(length * k as f64 / half as f64, 0.0));
+        let back =
+            (0..n - half).map(|k| DVec2::new(length * (1.0 - k as f64 / (n - half) as f64), width));
+        out.chain(back).collect()
+    }
+
+    #[test]
+    fn both_ways_of_loading_an_outline_cover_it_exactly() {
+        // Below and above BULK_LOAD_FROM: the triangles cover the outline's area exactly, keep
+        // the outline's points first and in order, and use each outline segment.
+        for n in [BULK_LOAD_FROM / 2, BULK_LOAD_FROM + 10] {
+            let outline = needle(n, 100.0, 0.3);
+            let mesh = triangulate(&outline, 0.2, 1_000_000).expect("a simple outline");
+            assert_eq!(&mesh.points[..n], &outline[..]);
+            let area: f64 = (mesh.triangles.iter())
+                .map(|t| {
+                    let [a, b, c] = t.map(|i| mesh.points[i as usize]);
+                    0.5 * (b - a).perp_dot(c - a)
+                })
+                .sum();
+            let shoelace: f64 = (0..n)
+                .map(|i| 0.5 * outline[i].perp_dot(outline[(i + 1) % n]))
+                .sum();
+            // Sums of a few thousand terms of size ~1: rounding is far below 1e-9 of the area.
+            assert!(
+                (area - shoelace).abs() < 1e-9 * shoelace,
+                "{n} points: area {area} vs {shoelace}"
+            );
+            let mut segments = std::collections::HashSet::new();
+            for t in &mesh.triangles {
+                for k in 0..3 {
+                    let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
+                    segments.insert((a, b));
+                }
+            }
+            let on_outline = (0..n as u32).filter(|&i| {
+                let j = (i + 1) % n as u32;
+                segments.contains(&(i.min(j), i.max(j)))
+            });
+            assert_eq!(
+                on_outline.count(),
+                n,
+                "{n} points: every outline segment is an edge"
+            );
+        }
+    }
+
+    #[test]
+    fn a_long_needle_is_meshed_in_well_under_its_old_time() {
+        // 20,000 points on a 100 m needle 0.3 m wide: inserting them in outline order took
+        // 5.1 s here (each point flips edges along the needle); bulk-loading them, 0.05 s.
+        // 3 s leaves room for a loaded test machine and still fails the old way.
+        let outline = needle(20_000, 100.0, 0.3);
+        let start = std::time::Instant::now();
+        triangulate(&outline, 0.05, 1_000_000).expect("a simple outline");
+        let elapsed = start.elapsed().as_secs_f64();
+        assert!(elapsed < 3.0, "took {elapsed} s");
+    }
+
     #[test]
     fn a_bow_tie_crosses_and_a_square_does_not() {
         let square = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].map(DVec2::from);
