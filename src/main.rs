@@ -338,7 +338,12 @@ fn execute(command: Command) -> Result<(), Error> {
         }
         Command::Plan { scene, json } => {
             let scene = Scene::load(&scene)?;
+            for w in drapekit::model::budget::load_warnings(&scene) {
+                eprintln!("drapekit: warning: {w}");
+            }
             let prep = drapekit::sim::prepare(&scene)?;
+            // What `drapekit run` would write into the scene's output folder, and whether it fits.
+            let output = drapekit::export::disk::check_space(&scene, &prep, &scene.output.dir, 0)?;
             let coarse_start = match &scene.cloth {
                 drapekit::scene::ClothSource::Pattern { coarse_start, .. } => *coarse_start,
                 _ => None,
@@ -365,6 +370,8 @@ fn execute(command: Command) -> Result<(), Error> {
                         "operations_per_substep": drapekit::plan::implicit_schedule(shape).len(),
                     })
                 }),
+                "output_frames": output.frames,
+                "output_bytes_estimate": output.bytes(),
             });
             if json {
                 println!(
@@ -383,6 +390,12 @@ fn execute(command: Command) -> Result<(), Error> {
                     } else {
                         "from the scene"
                     }
+                );
+                println!(
+                    "  writes about {} ({} frames) into {}",
+                    drapekit::export::disk::size(output.bytes()),
+                    output.frames,
+                    scene.output.dir.display()
                 );
                 if let Some(d) = coarse_start {
                     println!(

@@ -222,6 +222,11 @@ fn run_scene_from(
     if let Some(frames) = opts.frames {
         scene.solver.frames = frames;
     }
+    // Values that compute but no real scene has: said before anything slow starts.
+    let load_warnings = crate::model::budget::load_warnings(&scene);
+    for w in &load_warnings {
+        eprintln!("drapekit: warning: {w}");
+    }
     let (device, backend_note) = choose_device(opts.backend, &opts.adapter)?;
     if let Some(ctx) = &device {
         // Refused from the scene alone, before anything is built or baked.
@@ -233,6 +238,13 @@ fn run_scene_from(
         // The estimate cannot see an OBJ cloth's size; the built model can.
         crate::model::budget::check_model_textures(&scene, &prep.model, ctx.max_texels())?;
     }
+    let out_dir = opts
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| scene.output.dir.clone());
+    // Refused before anything is simulated or written: the files must fit the disk.
+    let from_frame = resume.as_ref().map_or(0, |c| c.header.frame);
+    crate::export::disk::check_space(&scene, &prep, &out_dir, from_frame)?;
     let mut solver = build_solver(&prep, device.as_ref())?;
     if let Some(note) = &backend_note {
         eprintln!("drapekit: {note}");
@@ -249,6 +261,7 @@ fn run_scene_from(
     for w in &warnings {
         eprintln!("drapekit: warning: {w}");
     }
+    warnings.extend(load_warnings);
     // Before the output folder exists: a coarse start that cannot settle is bad input. A
     // resumed run continues from its checkpoint, past any coarse start.
     let coarse = match (&scene.cloth, &resume) {
@@ -261,11 +274,16 @@ fn run_scene_from(
         ) => Some(coarse_start(&scene, *distance, device.as_ref(), &prep)?),
         _ => None,
     };
-    let out_dir = opts
-        .out_dir
-        .clone()
-        .unwrap_or_else(|| scene.output.dir.clone());
     std::fs::create_dir_all(&out_dir).map_err(|e| Error::io(&out_dir, e))?;
+    let stale = crate::atomic_file::remove_stale_temporaries(&out_dir);
+    if !stale.is_empty() {
+        eprintln!(
+            "drapekit: removed {} temporary file(s) a stopped run left in {}: {}",
+            stale.len(),
+            out_dir.display(),
+            stale.join(", ")
+        );
+    }
 
     let mut outputs = Vec::new();
     let mut stats = RunStats::default();
@@ -503,9 +521,39 @@ fn run_scene_from(
         error: result.as_ref().err().map(|e| e.to_string()),
         outputs,
     };
+    finish_summary(summary, result, &out_dir)
+}
+
+/// Writes `summary.json` and returns the run's result: its own error first (a frame that could
+/// not be written is the cause, a summary that then could not be written the consequence),
+/// and a summary number that is not finite (JSON would show it as `null`) as an unstable run.
+fn finish_summary(
+    mut summary: Summary,
+    result: Result<(), Error>,
+    out_dir: &std::path::Path,
+) -> Result<Summary, Error> {
+    let non_finite = summary.non_finite_fields();
+    let result = result.and_then(|()| match non_finite.is_empty() {
+        true => Ok(()),
+        false => Err(Error::Unstable(format!(
+            "the run produced non-finite values in the summary ({}), written there as null",
+            non_finite.join(", ")
+        ))),
+    });
+    if let Err(e) = &result {
+        summary.finite &= non_finite.is_empty();
+        summary.error.get_or_insert_with(|| e.to_string());
+    }
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
-    write_atomic(&out_dir.join("summary.json"), json.as_bytes())?;
-    result.map(|_| summary)
+    let written = write_atomic(&out_dir.join("summary.json"), json.as_bytes());
+    match (result, written) {
+        (Err(e), Err(w)) => {
+            eprintln!("drapekit: also: {w}");
+            Err(e)
+        }
+        (Err(e), Ok(())) | (Ok(()), Err(e)) => Err(e),
+        (Ok(()), Ok(())) => Ok(summary),
+    }
 }
 
 /// Sews and drapes `scene`'s garment at `distance` spacing until it settles (or its frames

@@ -1213,3 +1213,214 @@ fn probe_bench() {
         );
     }
 }
+
+#[test]
+#[ignore]
+fn probe_fine_worst() {
+    // 2 cm shirt (new solver) to frame 60, mapped to 5 mm; one substep: sweeps then Newton, worst vertices
+    use drapekit::plan::{newton_correction, Pass, SolveOp, SolveShape};
+    let div: f64 = std::env::var("DIV")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(4.0);
+    let mut scene = Scene::load(&fixture("scenes/tshirt_drape_cotton.toml")).unwrap();
+    scene.solver.iterations = 1;
+    let mut prep = prepare(&scene).unwrap();
+    prep.frames = 60;
+    prep.settle_speed = None;
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let mut stats = drapekit::sim::RunStats::default();
+    drapekit::sim::simulate(&prep, &mut cpu, &mut stats, |_, _| Ok(())).unwrap();
+    let state = cpu.state().unwrap();
+    let mut fine = scene.clone();
+    if let drapekit::scene::ClothSource::Pattern { options, .. } = &mut fine.cloth {
+        options.particle_distance /= div;
+    }
+    let fp = prepare(&fine).unwrap();
+    println!(
+        "levels {:?}",
+        fp.model.multigrid.as_ref().map(|m| m.sizes())
+    );
+    let tr = drapekit::pattern::transfer::Transfer::new(
+        prep.garment.as_ref().unwrap(),
+        fp.garment.as_ref().unwrap(),
+    );
+    let pos = tr.apply(&state.positions);
+    let vel = tr.apply(&state.velocities);
+    let packed = fp.model.packed_positions();
+    let st = drapekit::solver::ParticleState {
+        positions: pos
+            .iter()
+            .zip(&packed)
+            .map(|(p, q)| p.extend(q.w))
+            .collect(),
+        velocities: vel.iter().map(|v| v.extend(0.0)).collect(),
+    };
+    let params = drapekit::sim::phase_params(&fp, 60, &stats);
+    let mut s2 = CpuSolver::new(&fp.model, params, &fp.plan);
+    s2.set_state(&st);
+    let relax: u32 = std::env::var("RELAX")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(2);
+    for f in 61..61 + relax {
+        s2.advance(&substep_params(&fp, f)).unwrap();
+    }
+    let step = substep_params(&fp, 61 + relax)[0];
+    s2.run_pass(Pass::VbdInit, &step);
+    s2.run_solve_ops(&[SolveOp::ContactPlanes], &step);
+    let shape = SolveShape::for_run(&fp.model, &params, &fp.plan);
+    let report = |s2: &CpuSolver, label: &str| {
+        let v = s2.vbd.as_ref().unwrap();
+        let el = drapekit::cpu::Elements::new(&fp.model);
+        let view = el.view();
+        let s = drapekit::cpu::Implicit {
+            params: &params,
+            step: &step,
+            prev: &s2.pos,
+            target: &v.y,
+            el: &view,
+            planes: &v.planes,
+            lambdas: &v.lambdas,
+        };
+        let mut worst: Vec<(f32, usize)> = (0..fp.model.len())
+            .map(|i| (s.force_residual(i, &v.x, 9.81), i))
+            .collect();
+        let rms =
+            (worst.iter().map(|w| (w.0 * w.0) as f64).sum::<f64>() / worst.len() as f64).sqrt();
+        worst.sort_by(|a, b| b.0.partial_cmp(&a.0).unwrap());
+        println!("{label}: rms {rms:.3e}");
+        for &(r, i) in worst.iter().take(6) {
+            let plane = v.planes[i];
+            let phi = plane.w + plane.truncate().dot(v.x[i].truncate());
+            let sys = s.vertex_system(i, &v.x, None, &mut |_, _| {});
+            println!(
+                "  v{i} res {r:.1} phi {:.6} lambda {:.2e} |D| {:.2e} |f| {:.2e} {}",
+                phi,
+                v.lambdas[i].x,
+                v.x[i].truncate().length(),
+                sys.force.length(),
+                fp.describe_particle(i as u32)
+            );
+        }
+    };
+    report(&s2, "start");
+    s2.run_solve_ops(&vec![SolveOp::Sweep { iteration: 0 }; 8], &step);
+    report(&s2, "8 sweeps");
+    for k in 0..3 {
+        s2.run_solve_ops(&newton_correction(shape), &step);
+        let nt = s2.vbd.as_ref().unwrap().newton.as_ref().unwrap();
+        let norm = |a: &[glam::Vec4]| {
+            a.iter()
+                .map(|x| x.truncate().length_squared())
+                .sum::<f32>()
+                .sqrt()
+        };
+        println!(
+            "alpha {:?} |f| {:.3e} |r| {:.3e}",
+            nt.alphas.last(),
+            norm(&nt.force),
+            norm(&nt.levels[0].rhs)
+        );
+        report(&s2, &format!("newton {k}"));
+    }
+}
+
+#[test]
+#[ignore]
+fn probe_hessian() {
+    use drapekit::plan::{Pass, SolveOp};
+    let mut scene = Scene::load(&fixture("scenes/tshirt_drape_cotton.toml")).unwrap();
+    scene.solver.iterations = 1;
+    if std::env::var("NOBODY").is_ok() {
+        scene.bodies.clear();
+    }
+    let mut prep = prepare(&scene).unwrap();
+    prep.frames = std::env::var("FRAMES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(60);
+    prep.settle_speed = None;
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let mut stats = drapekit::sim::RunStats::default();
+    drapekit::sim::simulate(&prep, &mut cpu, &mut stats, |_, _| Ok(())).unwrap();
+    let params = drapekit::sim::phase_params(&prep, prep.frames, &stats);
+    cpu.set_params(&params);
+    let step = substep_params(&prep, prep.frames + 1)[0];
+    cpu.run_pass(Pass::VbdInit, &step);
+    cpu.run_solve_ops(
+        &[
+            SolveOp::ContactPlanes,
+            SolveOp::Sweep { iteration: 0 },
+            SolveOp::Assemble,
+        ],
+        &step,
+    );
+    let v = cpu.vbd.as_ref().unwrap();
+    let nt = v.newton.as_ref().unwrap();
+    let mg = &nt.structure;
+    let h = &nt.levels[0].blocks;
+    let el = drapekit::cpu::Elements::new(&prep.model);
+    let view = el.view();
+    let s = drapekit::cpu::Implicit {
+        params: &params,
+        step: &step,
+        prev: &cpu.pos,
+        target: &v.y,
+        el: &view,
+        planes: &v.planes,
+        lambdas: &v.lambdas,
+    };
+    let n = prep.model.len();
+    let mut rng = common::Rng::new(5);
+    let dir: Vec<glam::Vec4> = (0..n)
+        .map(|i| {
+            if cpu.pos[i].w == 0.0 {
+                glam::Vec4::ZERO
+            } else {
+                rng.vec3(1.0).extend(0.0)
+            }
+        })
+        .collect();
+    let eps = 1e-7f32;
+    let dplus: Vec<glam::Vec4> = v.x.iter().zip(&dir).map(|(a, b)| *a + eps * *b).collect();
+    let dminus: Vec<glam::Vec4> = v.x.iter().zip(&dir).map(|(a, b)| *a - eps * *b).collect();
+    let mut worst = Vec::new();
+    for i in 0..n {
+        if cpu.pos[i].w == 0.0 {
+            continue;
+        }
+        let fp = s.vertex_system(i, &dplus, None, &mut |_, _| {}).force;
+        let fm = s.vertex_system(i, &dminus, None, &mut |_, _| {}).force;
+        let fd = -(fp - fm) / (2.0 * eps);
+        let filt = s.contact_filter(i, &v.x);
+        if filt != glam::Mat3::IDENTITY {
+            continue;
+        } // skip filtered (contact) vertices
+        let mut hv = glam::Vec3::ZERO;
+        for b in mg.fine.offsets[i]..mg.fine.offsets[i + 1] {
+            hv += h[b as usize] * dir[mg.fine.columns[b as usize] as usize].truncate();
+        }
+        let err = (fd - hv).length() / fd.length().max(hv.length()).max(1e-9);
+        worst.push((err, i, fd.length(), hv.length()));
+    }
+    worst.sort_by(|a, b| b.0.partial_cmp(&a.0).unwrap());
+    let mean: f32 = worst.iter().map(|w| w.0).sum::<f32>() / worst.len() as f32;
+    println!("mean rel err {mean:.3e}");
+    for w in worst.iter().take(10) {
+        let i = w.1;
+        let nseam = prep
+            .model
+            .seams
+            .iter()
+            .filter(|sm| sm.v[..3].contains(&(i as u32)))
+            .count();
+        println!(
+            "  err {:.3} |fd| {:.3e} |Hv| {:.3e} seams {nseam} {}",
+            w.0,
+            w.2,
+            w.3,
+            prep.describe_particle(i as u32)
+        );
+    }
+}
