@@ -4,16 +4,24 @@
 pub mod bvh;
 pub mod edges;
 pub mod exact;
+pub mod gltf_read;
+pub mod gltf_write;
 pub mod motion;
+pub mod motions;
+pub mod rig;
 pub mod sdf;
 pub mod shapes;
 pub mod simplify;
+pub mod skin;
 
 use crate::error::InputError;
 use crate::mesh::TriMesh;
 use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
+
+/// Linear RGB of a body in previews and exported files (the previews' `BODY`).
+pub const BODY_COLOR: [f32; 3] = [0.62, 0.60, 0.58];
 
 /// How the CPU path finds contacts with the body (the GPU path always uses the SDF).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
