@@ -2,7 +2,7 @@
 //! skin's mesh primitives in the rest pose, its joints, inverse bind matrices and every
 //! animation's joint channels.
 
-use super::skin::{Channel, Clip, Influence, Interpolation, SkinnedMesh, Skeleton, Trs, Values};
+use super::skin::{Channel, Clip, Influence, Interpolation, Skeleton, SkinnedMesh, Trs, Values};
 use crate::error::InputError;
 use crate::mesh::TriMesh;
 use glam::{Mat4, Quat, Vec3};
@@ -199,7 +199,10 @@ where
     };
     for &k in order {
         let node = &joints[k];
-        s.names.push(node.name().map_or_else(|| format!("joint{k}"), String::from));
+        s.names.push(
+            node.name()
+                .map_or_else(|| format!("joint{k}"), String::from),
+        );
         s.rest.push(local(node));
         s.inverse_bind
             .push(inverse_bind.get(k).copied().unwrap_or(Mat4::IDENTITY));
@@ -237,7 +240,9 @@ fn skinned_primitives<'s>(
         .filter(|n| n.skin().is_some_and(|s| s.index() == skin));
     for node in skinned {
         let Some(m) = node.mesh() else { continue };
-        let mesh_name = m.name().map_or_else(|| format!("{}", m.index()), String::from);
+        let mesh_name = m
+            .name()
+            .map_or_else(|| format!("{}", m.index()), String::from);
         for prim in m.primitives() {
             if prim.mode() != gltf::mesh::Mode::Triangles {
                 continue;

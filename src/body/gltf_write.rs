@@ -265,8 +265,16 @@ impl Builder {
 
     /// Positions, with the bounds glTF requires of them.
     fn vec3s_bounded(&mut self, v: &[glam::Vec3]) -> Index<json::Accessor> {
-        let lo = v.iter().copied().reduce(glam::Vec3::min).unwrap_or_default();
-        let hi = v.iter().copied().reduce(glam::Vec3::max).unwrap_or_default();
+        let lo = v
+            .iter()
+            .copied()
+            .reduce(glam::Vec3::min)
+            .unwrap_or_default();
+        let hi = v
+            .iter()
+            .copied()
+            .reduce(glam::Vec3::max)
+            .unwrap_or_default();
         let bytes: Vec<u8> = (v.iter().flat_map(|p| p.to_array()))
             .flat_map(|x| x.to_le_bytes())
             .collect();

@@ -94,6 +94,28 @@ impl Skeleton {
         self.inverse_bind = self.globals(locals).iter().map(|g| g.inverse()).collect();
     }
 
+    /// The local transforms of the bind pose, in which every skinning matrix is the identity
+    /// and the mesh stands as stored (each joint's global is its inverse bind matrix inverted).
+    /// A file's node transforms may hold another pose.
+    pub fn bind_locals(&self) -> Vec<Trs> {
+        let globals: Vec<Mat4> = self.inverse_bind.iter().map(|b| b.inverse()).collect();
+        (0..self.len())
+            .map(|j| {
+                let above = match self.parents[j] {
+                    Some(p) => globals[p] * self.base[j],
+                    None => self.base[j],
+                };
+                let (scale, rotation, translation) =
+                    (above.inverse() * globals[j]).to_scale_rotation_translation();
+                Trs {
+                    translation,
+                    rotation: rotation.normalize(),
+                    scale,
+                }
+            })
+            .collect()
+    }
+
     /// The index of the joint called `name`.
     pub fn joint(&self, name: &str) -> Option<usize> {
         self.names.iter().position(|n| n == name)

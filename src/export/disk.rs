@@ -68,7 +68,7 @@ pub fn estimate(scene: &Scene, prep: &Prepared, from: u32) -> OutputEstimate {
                 body.triangles.len() as u64,
                 false,
             );
-            if c.motion.moves() {
+            if c.moves() {
                 per_frame += bytes;
             } else {
                 once += bytes;

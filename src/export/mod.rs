@@ -84,7 +84,7 @@ impl<'a> Exporter<'a> {
             names.push(name);
             for (i, c) in self.bodies.iter().enumerate() {
                 let stem = self.body_name(i);
-                let name = if c.motion.moves() {
+                let name = if c.moves() {
                     Some(format!("{stem}_{frame:04}.obj"))
                 } else {
                     (self.written == 0).then(|| format!("{stem}.obj"))
@@ -198,12 +198,9 @@ impl<'a> Exporter<'a> {
         }
     }
 
-    /// The body's vertices in world coordinates at `frame`'s time.
+    /// The body's vertices in world coordinates at `frame`'s time (deformed, if it deforms).
     fn body_world(&self, c: &Collider, frame: u32) -> Vec<Vec3> {
-        let pose = c.motion.at(frame as f32 * self.frame_dt);
-        (c.body.mesh.positions.iter())
-            .map(|p| pose.rotation * *p + pose.translation)
-            .collect()
+        c.world_positions(frame as f32 * self.frame_dt)
     }
 
     fn write(&self, name: &str, bytes: &[u8]) -> Result<(), Error> {
