@@ -47,9 +47,14 @@ pub struct Summary {
     pub iterations: Option<u32>,
     /// `[solver] tolerance`, if any (implicit only).
     pub tolerance: Option<f32>,
-    /// Sweeps the solve ran per substep, on average (implicit only): `iterations` without a
-    /// tolerance, fewer with one.
+    /// Vertex Block Descent sweeps the solve ran per substep, on average (implicit only).
     pub iterations_mean: Option<f64>,
+    /// Newton steps the solve ran per substep, on average (implicit with coarse levels):
+    /// `iterations` without a tolerance, fewer with one.
+    pub newton_steps_mean: Option<f64>,
+    /// The particles of each level of the multigrid solve, the cloth's own first (implicit with
+    /// coarse levels; null for plain Vertex Block Descent).
+    pub multigrid_levels: Option<Vec<usize>>,
     /// Vertex colours, i.e. dispatches per sweep (implicit only).
     pub colors: Option<usize>,
     /// Largest relative residual over the last substep of every output frame (implicit only):

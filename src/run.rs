@@ -447,6 +447,11 @@ fn run_scene_from(
             let frames = stats.frames_run - stats.coarse_start.as_ref().map_or(0, |c| c.frame);
             stats.iterations_run as f64 / (frames as f64 * prep.substeps as f64).max(1.0)
         }),
+        newton_steps_mean: prep.model.multigrid.as_ref().map(|_| {
+            let frames = stats.frames_run - stats.coarse_start.as_ref().map_or(0, |c| c.frame);
+            stats.newton_steps_run as f64 / (frames as f64 * prep.substeps as f64).max(1.0)
+        }),
+        multigrid_levels: prep.model.multigrid.as_ref().map(|m| m.sizes()),
         colors: prep.colors,
         max_residual: stats.max_residual,
         force_residual_max: stats.force_residual.map(|r| r.0),

@@ -130,6 +130,11 @@ pub struct Vbd {
     pub history: Vec<(u32, f32, f32)>,
     /// Sweeps run, in all; and as many as were last reported.
     pub iterations_run: (u64, u64),
+    /// Newton steps run, in all; and as many as were last reported.
+    pub newton_run: (u64, u64),
+    /// Whether the schedule's last operation, the final force residual, runs: only in the last
+    /// substep of a batch (the frame's), where it is read back.
+    pub measure_final: bool,
     /// With `profile` on: seconds spent in each kind of operation, and how many ran.
     pub profile: Option<std::collections::BTreeMap<&'static str, (u64, f64)>>,
 }
@@ -180,6 +185,8 @@ impl Vbd {
             residual: (0.0, 0.0),
             history: Vec::new(),
             iterations_run: (0, 0),
+            newton_run: (0, 0),
+            measure_final: true,
             profile: None,
         }
     }
@@ -197,7 +204,10 @@ impl Vbd {
             c.alphas.clear();
         }
         self.history.clear();
-        let schedule = self.schedule.clone();
+        let mut schedule = self.schedule.clone();
+        if !self.measure_final && schedule.last() == Some(&SolveOp::ForceResidual) {
+            schedule.pop();
+        }
         self.run_ops(&schedule, params, step, prev, sdfs);
     }
 
@@ -283,6 +293,9 @@ impl Vbd {
                 }
                 SolveOp::CheckConverged => {}
                 _ => {
+                    if op == SolveOp::Assemble {
+                        self.newton_run.0 += 1;
+                    }
                     let newton = self
                         .newton
                         .as_mut()

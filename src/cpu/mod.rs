@@ -480,7 +480,11 @@ impl Solver for CpuSolver {
     /// (thousands of small loops a frame in implicit Euler's solve).
     fn advance(&mut self, steps: &[SubstepParams]) -> Result<(), Error> {
         rayon::scope(|_| {
-            for step in steps {
+            for (k, step) in steps.iter().enumerate() {
+                // The final force residual is read at the frame's end only.
+                if let Some(v) = &mut self.vbd {
+                    v.measure_final = k + 1 == steps.len();
+                }
                 for i in 0..self.plan.passes.len() {
                     self.run_pass(self.plan.passes[i], step);
                 }
@@ -503,9 +507,12 @@ impl Solver for CpuSolver {
         Ok(self.vbd.as_mut().map(|v| {
             let (run, reported) = v.iterations_run;
             v.iterations_run.1 = run;
+            let newton = v.newton_run.0 - v.newton_run.1;
+            v.newton_run.1 = v.newton_run.0;
             SolveProgress {
                 relative_residual: relative_residual(&v.steps),
                 iterations: run - reported,
+                newton_steps: newton,
                 force_residual: v.residual,
             }
         }))
