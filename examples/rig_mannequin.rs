@@ -12,9 +12,9 @@ use drapekit::body::rig::rigged_mannequin;
 use drapekit::body::shapes;
 use drapekit::body::skin::SkinnedMesh;
 use drapekit::gpu::{AdapterChoice, GpuContext};
+use drapekit::preview::write_png;
 use drapekit::preview::CameraPreset;
 use drapekit::preview::{render, DrawMesh};
-use drapekit::preview::write_png;
 use glam::Vec3;
 use std::path::Path;
 
@@ -90,7 +90,11 @@ fn sheet(body: &SkinnedMesh, out: &Path) -> Result<(), Box<dyn std::error::Error
         let d = clip.duration();
         for k in 1..=3 {
             let t = d * k as f32 / 3.0 - if k == 3 { 0.0 } else { 0.0 };
-            let t = if clip.name == "walk" { d * k as f32 / 8.0 } else { t };
+            let t = if clip.name == "walk" {
+                d * k as f32 / 8.0
+            } else {
+                t
+            };
             let locals = clip.pose(&body.skeleton, t);
             tiles.push((
                 format!("{} {t:.2}", clip.name),
