@@ -89,7 +89,7 @@ fn sheet(body: &SkinnedMesh, out: &Path) -> Result<(), Box<dyn std::error::Error
     for clip in &body.clips {
         let d = clip.duration();
         for k in 1..=3 {
-            let t = d * k as f32 / 3.0 - if k == 3 { 0.0 } else { 0.0 };
+            let t = d * k as f32 / 3.0;
             let t = if clip.name == "walk" {
                 d * k as f32 / 8.0
             } else {

@@ -345,7 +345,7 @@ impl SkinnedMesh {
             }
         }
         for ib in &mut self.skeleton.inverse_bind {
-            *ib = *ib * from;
+            *ib *= from;
         }
         self
     }

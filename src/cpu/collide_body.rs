@@ -135,11 +135,11 @@ pub fn collide_body(
             return;
         }
         let (mut x, mut v) = (pos.truncate(), vel.truncate());
-        for b in 0..bodies {
+        for (b, body_words) in words.iter().enumerate().take(bodies) {
             let body = &params.bodies[b];
             (x, v) = if body.parts > 0 {
                 let parts = &step.parts[body.first_part as usize..];
-                collide_deformed(body, parts, words[b], x, v)
+                collide_deformed(body, parts, body_words, x, v)
             } else {
                 collide_particle(body, &step.bodies[b], x, v, |p| query(b, p))
             };
