@@ -35,13 +35,9 @@ pub enum Error {
     /// Writing an output file failed (a full disk, a lost permission); its temporary file was
     /// removed, so nothing half-written is left.
     #[error(
-        "cannot write {file} in {}: {source}{}; nothing half-written was left there",
+        "cannot write {file} in {}: {source}; nothing half-written was left there\n  fix: {}",
         dir.display(),
-        if source.kind() == std::io::ErrorKind::StorageFull {
-            " (the disk is full: free space on it, or write fewer frames)"
-        } else {
-            ""
-        }
+        io_fix(dir, source)
     )]
     Write {
         /// The file's name.
@@ -102,8 +98,8 @@ fn io_fix(path: &Path, source: &std::io::Error) -> String {
             path.display()
         ),
         K::StorageFull | K::QuotaExceeded | K::FileTooLarge => format!(
-            "the disk holding {folder} is full: free space there, or choose a folder on another \
-             disk with --out DIR"
+            "the disk holding {folder} is full: free space there, write fewer frames, or choose \
+             a folder on another disk with --out DIR"
         ),
         _ => format!("check that {folder} exists and that you may read and write in it"),
     }

@@ -83,6 +83,9 @@ pub struct Summary {
     pub max_edge_strain: f32,
     /// Largest spring strain at the last frame (the result; sewing can strain more on the way).
     pub last_frame_max_edge_strain: f32,
+    /// The 99th percentile of the spring strains at the last frame: what the cloth as a whole
+    /// rests at, apart from the few most pinched edges.
+    pub last_frame_edge_strain_p99: f32,
     /// The strain-limiting stage's cap on edge stretch (0.1 = 10%), or null when it is off.
     pub strain_limit: Option<f32>,
     /// With the cap on: the edges at it in the last frame (stretched to within 0.1% of the cap

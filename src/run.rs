@@ -482,6 +482,7 @@ fn run_scene_from(
             .names(),
         max_edge_strain: stats.max_edge_strain,
         last_frame_max_edge_strain: stats.last_edge_strain,
+        last_frame_edge_strain_p99: stats.last_edge_strain_p99,
         strain_limit: (prep.plan.contains(crate::plan::Pass::StrainLimit))
             .then_some(prep.params.strain_limit),
         strain_limit_clamped_edges: stats.strain_limit_clamped_edges,

@@ -153,7 +153,8 @@ fn fill_mid_run_then_resume(disk: &Path) {
             "the frame or checkpoint failed first: {error}"
         );
         assert!(error.contains(&format!("in {}", out.display())), "{error}");
-        assert!(error.contains("disk is full"), "{error}");
+        assert!(error.contains("No space left"), "{error}");
+        assert!(stderr.contains("fix: the disk holding"), "{stderr}");
         assert!(temporaries(&out).is_empty(), "{:?}", temporaries(&out));
         std::fs::remove_file(&filler).unwrap();
         std::fs::write(out.join(".frame_0050.obj.4242.9.tmp"), b"partial").unwrap();

@@ -119,6 +119,11 @@ fn free_bytes_of(dir: &Path) -> Option<u64> {
     if unsafe { libc::statvfs(path.as_ptr(), &mut stat) } != 0 {
         return None;
     }
+    // Pseudo filesystems (sysfs, procfs) report no blocks at all: they have no capacity to
+    // compare with, and whether they take files at all is the write's to say.
+    if stat.f_blocks == 0 {
+        return None;
+    }
     Some((stat.f_bavail as u64).saturating_mul(stat.f_frsize as u64))
 }
 

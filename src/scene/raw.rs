@@ -194,8 +194,7 @@ pub(super) struct RawSolver {
     pub(super) substeps: Option<RawSubsteps>,
     #[serde(default = "default_integrator")]
     pub(super) integrator: String,
-    #[serde(default = "default_iterations")]
-    pub(super) iterations: i64,
+    pub(super) iterations: Option<i64>,
     pub(super) tolerance: Option<f64>,
     pub(super) multigrid: Option<bool>,
     pub(super) smoothing_sweeps: Option<i64>,
@@ -248,13 +247,6 @@ fn default_strain_limit_iterations() -> i64 {
 fn default_fps() -> f64 {
     24.0
 }
-/// Sweeps per implicit substep; docs/src/implicit.md shows the residual it leaves.
-fn default_iterations() -> i64 {
-    DEFAULT_ITERATIONS
-}
-
-/// The default of `[solver] iterations`.
-pub(super) const DEFAULT_ITERATIONS: i64 = 10;
 
 /// A frame with a spring stretched past 500% is an exploded frame.
 fn default_max_strain() -> f64 {
