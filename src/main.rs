@@ -43,16 +43,24 @@ enum Command {
         /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
         #[arg(long, default_value = "auto")]
         adapter: AdapterChoice,
-        /// Override the number of output frames.
-        #[arg(long)]
+        /// Override the number of output frames (1 or more).
+        #[arg(long, value_parser = parse_frames)]
         frames: Option<u32>,
-        /// No progress bar.
+        /// No progress bars.
         #[arg(long)]
         quiet: bool,
         /// Write checkpoint.bin every N frames (Ctrl-C always writes one); continue with
         /// `drapekit resume OUT`.
         #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
         checkpoint_every: Option<u32>,
+        /// Treat warnings as errors: exit 5 before the run when an input is implausible, and
+        /// after it (with every file written) when the result has warnings.
+        #[arg(long)]
+        strict: bool,
+        /// Replace another run's results in the output folder (a rerun of the same scene
+        /// replaces its own without it). Only drapekit's own files are removed.
+        #[arg(long)]
+        overwrite: bool,
     },
     /// Continue a run from the checkpoint in its output folder (same scene, backend, adapter).
     #[command(after_help = "Examples:\n  \
@@ -62,11 +70,14 @@ enum Command {
         /// The run's output folder (holding checkpoint.bin).
         dir: PathBuf,
         /// Run to this many output frames instead of the original count.
-        #[arg(long)]
+        #[arg(long, value_parser = parse_frames)]
         frames: Option<u32>,
-        /// No progress bar.
+        /// No progress bars.
         #[arg(long)]
         quiet: bool,
+        /// Exit 5 (with every file written) when the result has warnings.
+        #[arg(long)]
+        strict: bool,
     },
     /// List the GPU adapters, the one `--adapter auto` picks, and the CPU.
     #[command(after_help = "Example:\n  \
@@ -183,8 +194,8 @@ struct BatchCli {
     /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
     #[arg(long, default_value = "auto")]
     adapter: AdapterChoice,
-    /// Override every scene's number of output frames.
-    #[arg(long)]
+    /// Override every scene's number of output frames (1 or more).
+    #[arg(long, value_parser = parse_frames)]
     frames: Option<u32>,
 }
 
@@ -213,6 +224,17 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
         }
     };
     Ok((side(w)?, side(h)?))
+}
+
+/// `--frames`: a whole number of output frames, at least 1 (frame 0 is the starting state).
+fn parse_frames(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(0) => {
+            Err("0 frames simulate nothing (frame 0 is the starting state): give 1 or more".into())
+        }
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!("{s:?} is not a whole number of frames, e.g. 48")),
+    }
 }
 
 /// A strain as a fraction, from 0.001 to 5 (0.1% to 500%).
@@ -269,8 +291,24 @@ fn execute(command: Command) -> Result<(), Error> {
             frames,
             quiet,
             checkpoint_every,
+            strict,
+            overwrite,
         } => {
             let scene = Scene::load(&scene)?;
+            drapekit::progress::enable(!quiet);
+            if strict {
+                // Implausible inputs stop a strict run before its long part.
+                let found = drapekit::health::scene_warnings(&scene)?;
+                if !found.is_empty() {
+                    for w in &found {
+                        eprintln!("drapekit: warning: {w}");
+                    }
+                    return Err(Error::Warnings(format!(
+                        "--strict: {} warning(s) about the scene's inputs (above); nothing was run",
+                        found.len()
+                    )));
+                }
+            }
             let opts = RunOptions {
                 backend,
                 adapter,
@@ -278,18 +316,25 @@ fn execute(command: Command) -> Result<(), Error> {
                 frames,
                 progress: !quiet,
                 checkpoint_every,
+                overwrite,
             };
             let out_dir = out.unwrap_or_else(|| scene.output.dir.clone());
             stop_on_ctrl_c();
             let summary = run_scene(&scene, &opts)?;
             report(&summary, &out_dir);
-            Ok(())
+            strict_check(strict, &summary)
         }
-        Command::Resume { dir, frames, quiet } => {
+        Command::Resume {
+            dir,
+            frames,
+            quiet,
+            strict,
+        } => {
             stop_on_ctrl_c();
+            drapekit::progress::enable(!quiet);
             let summary = drapekit::run::resume_run(&dir, frames, !quiet)?;
             report(&summary, &dir);
-            Ok(())
+            strict_check(strict, &summary)
         }
         Command::Info => {
             let info = drapekit::gpu::adapters();
@@ -338,6 +383,7 @@ fn execute(command: Command) -> Result<(), Error> {
         }
         Command::Plan { scene, json } => {
             let scene = Scene::load(&scene)?;
+            drapekit::progress::enable(!json);
             let prep = drapekit::sim::prepare(&scene)?;
             let coarse_start = match &scene.cloth {
                 drapekit::scene::ClothSource::Pattern { coarse_start, .. } => *coarse_start,
@@ -498,20 +544,23 @@ fn report(summary: &drapekit::output::Summary, out_dir: &std::path::Path) {
             c.wall_seconds
         );
     }
-    if let Some(s) = &summary.settled {
-        let residual = s.force_residual_rms.map_or(String::new(), |r| {
-            format!(", force residual {r:.2e} of the weight")
-        });
-        println!(
-            "settled at frame {} (RMS speed {:.2e} m/s{residual})",
-            s.frame, s.rms_speed_m_s
-        );
-    }
+    println!("{}", drapekit::health::block(summary));
     println!(
         "wrote {} files to {}",
         summary.outputs.len(),
         out_dir.display()
     );
+}
+
+/// `--strict`: a run with warnings is an error (exit 5), after its results were written.
+fn strict_check(strict: bool, summary: &drapekit::output::Summary) -> Result<(), Error> {
+    if strict && !summary.warnings.is_empty() {
+        return Err(Error::Warnings(format!(
+            "--strict: the run has {} warning(s) (listed above); its files are written",
+            summary.warnings.len()
+        )));
+    }
+    Ok(())
 }
 
 /// Ctrl-C finishes the current frame, writes a checkpoint and exits with 130; a second Ctrl-C

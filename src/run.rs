@@ -72,6 +72,9 @@ pub struct RunOptions {
     pub progress: bool,
     /// Write `checkpoint.bin` every this many frames (and always when interrupted).
     pub checkpoint_every: Option<u32>,
+    /// Replace the results of another run in the output folder (a rerun of the same scene
+    /// replaces its own without it).
+    pub overwrite: bool,
 }
 
 /// Creates the chosen backend; with `Auto`, falls back to the CPU and returns a note saying why.
@@ -163,6 +166,7 @@ pub fn adapter_named(adapter: &AdapterChoice) -> bool {
 ///     frames: Some(2),
 ///     progress: false,
 ///     checkpoint_every: None,
+///     overwrite: false,
 /// };
 /// let summary = run_scene(&scene, &options)?;
 /// assert!(summary.finite);
@@ -209,6 +213,7 @@ pub fn resume_run(
         frames: frames.or(h.frames),
         progress,
         checkpoint_every: h.checkpoint_every,
+        overwrite: false,
     };
     run_scene_from(&scene, &opts, Some(checkpoint))
 }
@@ -220,7 +225,22 @@ fn run_scene_from(
 ) -> Result<Summary, Error> {
     let mut scene = scene.clone();
     if let Some(frames) = opts.frames {
-        scene.solver.frames = frames;
+        scene.solver.frames = check_frames(&scene, frames)?;
+    }
+    let out_dir = opts
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| scene.output.dir.clone());
+    // A resumed run continues in its own folder; a new one must not mix with another's.
+    let stale = match resume {
+        None => crate::run_folder::check(&out_dir, &scene, opts.overwrite)?,
+        Some(_) => Vec::new(),
+    };
+    // Before the distance field is baked (a body in the wrong unit is named before its SDF's
+    // size is refused) and before the long part of the run.
+    let input_warnings = crate::health::scene_warnings(&scene)?;
+    for w in &input_warnings {
+        eprintln!("drapekit: warning: {w}");
     }
     let (device, backend_note) = choose_device(opts.backend, &opts.adapter)?;
     if let Some(ctx) = &device {
@@ -249,6 +269,7 @@ fn run_scene_from(
     for w in &warnings {
         eprintln!("drapekit: warning: {w}");
     }
+    warnings.splice(0..0, input_warnings);
     // Before the output folder exists: a coarse start that cannot settle is bad input. A
     // resumed run continues from its checkpoint, past any coarse start.
     let coarse = match (&scene.cloth, &resume) {
@@ -261,15 +282,21 @@ fn run_scene_from(
         ) => Some(coarse_start(&scene, *distance, device.as_ref(), &prep)?),
         _ => None,
     };
-    let out_dir = opts
-        .out_dir
-        .clone()
-        .unwrap_or_else(|| scene.output.dir.clone());
-    std::fs::create_dir_all(&out_dir).map_err(|e| Error::io(&out_dir, e))?;
-
+    crate::run_folder::clear(&out_dir, &stale)?;
+    if !stale.is_empty() {
+        eprintln!(
+            "drapekit: replaced the {} files of the previous run in {}",
+            stale.len(),
+            out_dir.display()
+        );
+    }
     let mut outputs = Vec::new();
+    if resume.is_none() {
+        outputs.push(crate::run_folder::write_scene_copy(&out_dir, &scene)?);
+    }
+    let scene_path = crate::run_folder::absolute(&scene.path);
     let mut stats = RunStats::default();
-    let mut exporter = Exporter::new(&prep, &scene.output, &out_dir);
+    let mut exporter = Exporter::new(&prep, &scene, &out_dir);
     let coarse_started = coarse.is_some();
     let resume = match resume {
         None => coarse.map(|(from, coarse_stats)| {
@@ -309,7 +336,7 @@ fn run_scene_from(
         Checkpoint {
             header: CheckpointHeader {
                 drapekit_version: env!("CARGO_PKG_VERSION").to_string(),
-                scene_path: scene.path.clone(),
+                scene_path: scene_path.clone(),
                 scene_text: scene.source.clone(),
                 backend: opts.backend.name().to_string(),
                 adapter: opts.adapter.to_string(),
@@ -378,9 +405,26 @@ fn run_scene_from(
     // frames (the settle rule, or a frame count that is not a multiple). The solver still
     // holds its positions.
     let last = stats.frames_run;
-    if result.is_ok() && exporter.wants_frames() && !exporter.on_schedule(last) {
-        outputs.extend(exporter.frame(last, &solver.state()?.positions)?);
-        previews.frame_written(last);
+    let last_state = if result.is_ok() {
+        Some(solver.state()?)
+    } else {
+        None
+    };
+    if let Some(state) = last_state.as_ref() {
+        if exporter.wants_frames() && !exporter.on_schedule(last) {
+            outputs.extend(exporter.frame(last, &state.positions)?);
+            previews.frame_written(last);
+        }
+    }
+    let show_through = (last_state.as_ref())
+        .and_then(|state| crate::health::show_through(&prep, &state.positions, last));
+    if result.is_ok() {
+        let found =
+            crate::health::result_warnings(&prep, &stats, show_through.as_ref(), result.is_ok());
+        for w in &found {
+            eprintln!("drapekit: warning: {w}");
+        }
+        warnings.extend(found);
     }
     let checkpoint_name = crate::checkpoint::CHECKPOINT_FILE.to_string();
     if out_dir.join(&checkpoint_name).is_file() && !outputs.contains(&checkpoint_name) {
@@ -388,6 +432,10 @@ fn run_scene_from(
     }
     // The caches hold the frames written so far, also when the run stopped early.
     outputs.extend(exporter.finish()?);
+    for w in &exporter.warnings {
+        eprintln!("drapekit: warning: {w}");
+    }
+    warnings.append(&mut exporter.warnings);
     if result.is_ok() && previews.wanted() {
         let (names, missing) = previews.finish();
         outputs.extend(names);
@@ -400,7 +448,8 @@ fn run_scene_from(
     let substeps_run = stats.frames_run as f64 * prep.substeps as f64;
     let first_body = prep.model.colliders.first();
     let summary = Summary {
-        scene: scene.path.display().to_string(),
+        scene: scene_path.display().to_string(),
+        inputs: crate::run_folder::inputs(&scene),
         backend: solver.backend_name().to_string(),
         backend_note,
         adapter: solver.adapter(),
@@ -488,6 +537,7 @@ fn run_scene_from(
         }),
         max_penetration_m: first_body.map(|_| stats.max_penetration_m),
         body_contacts: first_body.map(|_| stats.body_contacts),
+        body_show_through: show_through,
         sdf: first_body.map(|c| c.bake.clone()),
         body_sdfs: (prep.model.colliders.iter())
             .map(|c| c.bake.clone())
@@ -506,6 +556,19 @@ fn run_scene_from(
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
     write_atomic(&out_dir.join("summary.json"), json.as_bytes())?;
     result.map(|_| summary)
+}
+
+/// `--frames N` for `scene`: at least one frame (frame 0 is the start, not a simulated frame).
+fn check_frames(scene: &Scene, frames: u32) -> Result<u32, Error> {
+    if frames == 0 {
+        return Err(Error::Input(crate::error::InputError::new(
+            &scene.path,
+            "--frames",
+            "0 output frames simulate nothing (frame 0 is the starting state)",
+            "give --frames 1 or more, or leave it out to run the scene's solver.frames",
+        )));
+    }
+    Ok(frames)
 }
 
 /// Sews and drapes `scene`'s garment at `distance` spacing until it settles (or its frames

@@ -6,6 +6,7 @@ mod animation;
 mod camera;
 mod colors;
 mod during_run;
+mod fabric_look;
 mod font;
 mod legend;
 mod obj_frame;
@@ -20,6 +21,7 @@ pub use colors::{
     Legend, PenetrationScale, BODY, FABRIC, PALETTE, SEAM,
 };
 pub use during_run::{RunPreviews, GIF_FILE};
+pub use fabric_look::{fabric_color, fabric_strain_max, FabricLook, LOOKS};
 pub use legend::{draw_legend, srgb_byte, text_scale, LegendBox};
 pub use obj_frame::{frames, read_obj, FrameMesh};
 pub use previewer::{Look, Previewer};
@@ -31,7 +33,7 @@ use crate::error::Error;
 use crate::gpu::AdapterChoice;
 use crate::scene::{CameraSetting, Scene, DEFAULT_STRAIN_MAX};
 use previewer::bad;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The camera a scene's `[preview] camera` names.
 pub fn scene_camera(setting: &CameraSetting) -> CameraChoice {
@@ -59,10 +61,15 @@ pub fn scene_look(scene: Option<&Scene>, mode: ColorMode) -> Look {
             camera: scene_camera(&s.preview.camera),
             mode,
             size: s.preview.size,
-            strain_max: s.preview.strain_max,
+            strain_max: (s.preview.strain_max).unwrap_or_else(|| fabric_strain_max(&s.fabric)),
             seams: s.preview.seams,
             legend: true,
-            colors: s.preview.colors.clone(),
+            // The scene's colours per panel, else the fabric's one colour for every panel.
+            colors: if s.preview.colors.is_empty() {
+                vec![fabric_color(&s.fabric)]
+            } else {
+                s.preview.colors.clone()
+            },
             checker: s.preview.checker.unwrap_or(0.0),
         },
         None => Look {
@@ -78,8 +85,18 @@ pub fn scene_look(scene: Option<&Scene>, mode: ColorMode) -> Look {
     }
 }
 
-/// Reads a run's `summary.json` and loads the scene it names (if it still exists) and its fps.
+/// Reads a run's `summary.json` and loads the scene it ran (its copy in the folder, see
+/// `run_folder::run_scene`) and its fps.
 pub fn run_scene_of(run: &Path) -> Result<(Option<Scene>, f32), Error> {
+    let (scene, fps, _) = run_summary(run)?;
+    Ok((scene, fps))
+}
+
+/// A run folder's frames as its summary lists them: frame numbers and files.
+type FrameList = Vec<(u32, PathBuf)>;
+
+/// `run_scene_of`, and the frames the summary lists.
+fn run_summary(run: &Path) -> Result<(Option<Scene>, f32, Option<FrameList>), Error> {
     let summary_path = run.join("summary.json");
     let summary: serde_json::Value = std::fs::read(&summary_path)
         .map_err(|e| Error::io(&summary_path, e))
@@ -92,12 +109,10 @@ pub fn run_scene_of(run: &Path) -> Result<(Option<Scene>, f32), Error> {
                 )
             })
         })?;
-    let scene = match summary["scene"].as_str() {
-        Some(path) => Some(Scene::load(Path::new(path))?),
-        None => None,
-    };
+    let scene = crate::run_folder::run_scene(run, &summary)?;
     let fps = summary["fps"].as_f64().unwrap_or(24.0) as f32;
-    Ok((scene, fps))
+    let frames = crate::run_folder::summary_frames(run, &summary);
+    Ok((scene, fps, frames))
 }
 
 /// Renders frame `frame` (`None`: the last) of the run in `run` and writes it to `out` as a
@@ -122,7 +137,7 @@ pub fn preview_run(
             "leave out --frame, or write a .png",
         ));
     }
-    let (scene, fps) = run_scene_of(run)?;
+    let (scene, fps, listed) = run_summary(run)?;
     let mut look = scene_look(scene.as_ref(), mode);
     if gif {
         look.size = scene
@@ -131,8 +146,12 @@ pub fn preview_run(
     }
     adjust(&mut look);
     let mut previewer = Previewer::new(run, scene.as_ref(), fps, adapter)?;
+    if let Some(listed) = listed {
+        previewer.use_frames(listed);
+    }
     if gif {
-        let frames: Vec<u32> = obj_frame::frames(run)?
+        let frames: Vec<u32> = previewer
+            .frame_files()?
             .into_iter()
             .map(|(n, _)| n)
             .collect();

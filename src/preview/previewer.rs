@@ -62,6 +62,8 @@ pub struct Previewer<'a> {
     exact: Option<Vec<ExactBody>>,
     rest: Option<Vec<Vec3>>,
     seams: Option<Vec<[u32; 2]>>,
+    /// The run's frames as its summary lists them (`None`: every frame file in the folder).
+    listed: Option<Vec<(u32, PathBuf)>>,
 }
 
 impl<'a> Previewer<'a> {
@@ -91,12 +93,26 @@ impl<'a> Previewer<'a> {
             exact: None,
             rest: None,
             seams: None,
+            listed: None,
         })
+    }
+
+    /// Shows only these frames (the run's, from its summary), not every frame file in the folder.
+    pub fn use_frames(&mut self, frames: Vec<(u32, PathBuf)>) {
+        self.listed = Some(frames);
+    }
+
+    /// The frames to show, in order.
+    pub fn frame_files(&self) -> Result<Vec<(u32, PathBuf)>, Error> {
+        match &self.listed {
+            Some(list) => Ok(list.clone()),
+            None => frames(&self.run),
+        }
     }
 
     /// The frame `n` (`None`: the last).
     pub fn load(&self, n: Option<u32>) -> Result<FrameMesh, Error> {
-        let all = frames(&self.run)?;
+        let all = self.frame_files()?;
         let found = match n {
             None => all.last().cloned(),
             Some(n) => all.iter().find(|(k, _)| *k == n).cloned(),
@@ -124,7 +140,7 @@ impl<'a> Previewer<'a> {
     /// Frame 0, the strain's rest shape, read once.
     fn rest(&mut self, particles: usize) -> Result<&[Vec3], Error> {
         if self.rest.is_none() {
-            let first = frames(&self.run)?.into_iter().next();
+            let first = self.frame_files()?.into_iter().next();
             let rest = match first {
                 Some((0, path)) => read_obj(&path)?.positions,
                 _ => Vec::new(),
