@@ -92,6 +92,7 @@ enum Command {
         drapekit preview out/tshirt_drape_cotton --out shirt.png\n  \
         drapekit preview out/tshirt_drape_cotton --mode strain --strain-max 0.1 --seams --out strain.png\n  \
         drapekit preview out/tshirt_drape_cotton --checker 0.05 --out grain.png\n  \
+        drapekit preview out/tshirt_drape_cotton --turntable --out turntable.gif\n  \
         drapekit preview out/skirt_rotating_implicit --camera front --out skirt.gif\n  \
         drapekit preview out/drape_sphere --frame 0 --camera front --size 3840x2160 --out big.png"
     )]
@@ -105,13 +106,15 @@ enum Command {
         /// three-quarter).
         #[arg(long)]
         camera: Option<drapekit::preview::CameraPreset>,
-        /// fabric; strain (each triangle's stretch against frame 0, blue 0% to red at
-        /// --strain-max); or penetration (distance to the body: red inside, yellow within the
-        /// contact thickness, green beyond).
+        /// fabric (the fabric's colour or image, folds darkened by ambient occlusion); strain
+        /// (each triangle's stretch against frame 0, blue 0% to red at --strain-max); or
+        /// penetration (distance to the body: red inside, yellow within the contact thickness,
+        /// green beyond).
         #[arg(long, default_value = "fabric")]
         mode: drapekit::preview::ColorMode,
         /// The strain shown in full red, as a fraction: 0.2 = 20% (default: the scene's
-        /// [preview] strain_max, else 0.2).
+        /// [preview] strain_max, else the fabric preset's range: 5% for wovens, 20% for the
+        /// knit, 15% for leather; 20% without a preset).
         #[arg(long, value_parser = parse_strain_max)]
         strain_max: Option<f32>,
         /// Draw the garment's seams as dark lines (also on with [preview] seams = true).
@@ -131,6 +134,10 @@ enum Command {
         /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
         #[arg(long, default_value = "auto")]
         adapter: AdapterChoice,
+        /// Spin the frame (--frame, default the last) a full turn around the body: a looping
+        /// GIF of 36 views, 3.6 s a turn (--out must end in .gif).
+        #[arg(long)]
+        turntable: bool,
         /// The PNG to write; a name ending in .gif writes every frame of the run as a looping
         /// animation instead (default size: the scene's [preview] animation_size, else 480x360).
         #[arg(long)]
@@ -451,6 +458,7 @@ fn execute(command: Command) -> Result<(), Error> {
             checker,
             size,
             adapter,
+            turntable,
             out,
         } => {
             if let Some(c) = checker.filter(|c| !(c.is_finite() && *c > 0.0 && *c <= 10.0)) {
@@ -477,7 +485,7 @@ fn execute(command: Command) -> Result<(), Error> {
                 }
                 look.legend = !no_legend;
             };
-            drapekit::preview::preview_run(&run, frame, mode, &adapter, adjust, &out)?;
+            drapekit::preview::preview_run(&run, frame, mode, &adapter, adjust, turntable, &out)?;
             println!("wrote {}", out.display());
             Ok(())
         }

@@ -451,6 +451,13 @@ fn a_sewn_garment_is_one_welded_mesh_in_the_gltf_from_its_first_sewn_frame() {
     scene.output.every = 3;
     scene.output.gltf = true;
     assert!(scene.output.weld_seams, "on by default");
+    // The shipped gingham, one copy per 4 cm × 4 cm: the materials' base-colour texture.
+    let size_m = [0.04f32, 0.04];
+    scene.preview.texture = Some(drapekit::scene::TextureSetting {
+        path: common::fixture("textures/gingham.png"),
+        size_m,
+        pixels: (64, 64),
+    });
     let out = out_dir("welded");
     run_scene(&scene, &options(&out, 21)).unwrap();
     let prep = prepare(&scene).unwrap();
@@ -474,7 +481,7 @@ fn a_sewn_garment_is_one_welded_mesh_in_the_gltf_from_its_first_sewn_frame() {
     );
 
     // Welding: every seam pair's vertices become one; the garment is one connected mesh.
-    let weld = drapekit::export::weld::Weld::of_garment(g);
+    let weld = drapekit::pattern::weld::Weld::of_garment(g);
     assert!(weld.len() < prep.model.len());
     let mut parent: Vec<usize> = (0..weld.len()).collect();
     fn root(p: &mut [usize], mut i: usize) -> usize {
@@ -521,7 +528,32 @@ fn a_sewn_garment_is_one_welded_mesh_in_the_gltf_from_its_first_sewn_frame() {
         &times,
         &g.panel_names,
     );
-    assert!(glb.uv.is_some());
+    // Texture coordinates in copies of the image, its top towards each panel's +y (glTF's t
+    // runs down the image); the welded vertex takes its first particle's pattern point.
+    let uv = glb.uv.expect("texture coordinates");
+    for (t, p) in uv.iter().zip(weld.uv(&g.uv)) {
+        assert_eq!(*t, [p.x / size_m[0], -p.y / size_m[1]]);
+    }
+    let gltf = gltf::Gltf::from_slice(&std::fs::read(out.join("garment.glb")).unwrap()).unwrap();
+    let png = std::fs::read(common::fixture("textures/gingham.png")).unwrap();
+    let image = gltf.images().next().expect("the fabric image");
+    let gltf::image::Source::View { view, mime_type } = image.source() else {
+        panic!("embedded")
+    };
+    assert_eq!(mime_type, "image/png");
+    let blob = gltf.blob.as_deref().unwrap();
+    assert_eq!(
+        &blob[view.offset()..view.offset() + view.length()],
+        &png[..]
+    );
+    for m in gltf.materials().filter(|m| m.name() != Some("body")) {
+        let info = m
+            .pbr_metallic_roughness()
+            .base_color_texture()
+            .expect("textured");
+        assert_eq!(info.texture().source().index(), image.index());
+        assert_eq!(m.pbr_metallic_roughness().base_color_factor(), [1.0; 4]);
+    }
     let s: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
     assert!(

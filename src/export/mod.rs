@@ -7,7 +7,6 @@
 pub mod glb;
 pub mod obj;
 pub mod pc2;
-pub mod weld;
 
 use crate::atomic_file::write_atomic;
 use crate::body::Collider;
@@ -222,7 +221,8 @@ impl<'a> Exporter<'a> {
         let (start, weld) = self.gltf_start();
         let times = &all_times[start..];
         let frames = &self.kept[start..];
-        let welded = weld.then(|| weld::Weld::of_garment(self.garment.expect("weld needs one")));
+        let welded = weld
+            .then(|| crate::pattern::weld::Weld::of_garment(self.garment.expect("weld needs one")));
         let (frames, triangles, uv) = match &welded {
             Some(w) => (
                 frames.iter().map(|f| w.positions(f)).collect(),

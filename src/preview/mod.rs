@@ -10,11 +10,14 @@ mod fabric_look;
 mod font;
 mod legend;
 mod obj_frame;
+mod occlusion;
 mod previewer;
 mod render;
 mod seams;
 
-pub use animation::{pick_frames, write_gif, MAX_ANIMATION_FRAMES};
+pub use animation::{
+    pick_frames, write_gif, write_turntable, MAX_ANIMATION_FRAMES, TURNTABLE_STEPS,
+};
 pub use camera::{Camera, CameraChoice, CameraPreset, PRESET_FOV_DEG};
 pub use colors::{
     panel_color, penetration_legend, strain_legend, strain_ramp, triangle_strain, ColorMode,
@@ -24,8 +27,9 @@ pub use during_run::{RunPreviews, GIF_FILE};
 pub use fabric_look::{fabric_color, fabric_strain_max, FabricLook, LOOKS};
 pub use legend::{draw_legend, srgb_byte, text_scale, LegendBox};
 pub use obj_frame::{frames, read_obj, FrameMesh};
+pub use occlusion::{ambient_occlusion, REACH as OCCLUSION_REACH};
 pub use previewer::{Look, Previewer};
-pub use render::{render, DrawMesh, SHADER};
+pub use render::{render, render_textured, DrawMesh, FabricTexture, SHADER};
 pub use seams::seam_ribbons;
 
 use crate::atomic_file::write_atomic;
@@ -64,13 +68,16 @@ pub fn scene_look(scene: Option<&Scene>, mode: ColorMode) -> Look {
             strain_max: (s.preview.strain_max).unwrap_or_else(|| fabric_strain_max(&s.fabric)),
             seams: s.preview.seams,
             legend: true,
-            // The scene's colours per panel, else the fabric's one colour for every panel.
-            colors: if s.preview.colors.is_empty() {
-                vec![fabric_color(&s.fabric)]
-            } else {
-                s.preview.colors.clone()
+            // The scene's colours per panel (tinting the fabric image, if any), else the
+            // fabric's one colour for every panel, or the image's own.
+            colors: match (s.preview.colors.is_empty(), &s.preview.texture) {
+                (false, _) => s.preview.colors.clone(),
+                (true, Some(_)) => vec![glam::Vec3::ONE],
+                (true, None) => vec![fabric_color(&s.fabric)],
             },
             checker: s.preview.checker.unwrap_or(0.0),
+            occlusion: mode == ColorMode::Fabric,
+            texture: s.preview.texture.clone(),
         },
         None => Look {
             camera: CameraChoice::Preset(CameraPreset::ThreeQuarter),
@@ -81,6 +88,8 @@ pub fn scene_look(scene: Option<&Scene>, mode: ColorMode) -> Look {
             legend: true,
             colors: Vec::new(),
             checker: 0.0,
+            occlusion: mode == ColorMode::Fabric,
+            texture: None,
         },
     }
 }
@@ -116,21 +125,30 @@ fn run_summary(run: &Path) -> Result<(Option<Scene>, f32, Option<FrameList>), Er
 }
 
 /// Renders frame `frame` (`None`: the last) of the run in `run` and writes it to `out` as a
-/// PNG; or, when `out` ends in `.gif`, every frame in the folder as an animation (at the
-/// scene's `[preview] animation_size` unless `adjust` sets a size). The look starts from the
-/// run's scene (`[preview]`) and `adjust` changes it (the command line's options).
+/// PNG; or, when `out` ends in `.gif`, every frame of the run as an animation, or with
+/// `turntable` that frame seen from all around (at the scene's `[preview] animation_size`
+/// unless `adjust` sets a size). The look starts from the run's scene (`[preview]`) and
+/// `adjust` changes it (the command line's options).
 pub fn preview_run(
     run: &Path,
     frame: Option<u32>,
     mode: ColorMode,
     adapter: &AdapterChoice,
     adjust: impl FnOnce(&mut Look),
+    turntable: bool,
     out: &Path,
 ) -> Result<(), Error> {
     let gif = out
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gif"));
-    if gif && frame.is_some() {
+    if turntable && !gif {
+        return Err(bad(
+            out,
+            "a turntable is an animation",
+            "write it to a .gif (e.g. --out spin.gif)",
+        ));
+    }
+    if gif && frame.is_some() && !turntable {
         return Err(bad(
             out,
             "a .gif shows every frame, and --frame picks one",
@@ -150,14 +168,17 @@ pub fn preview_run(
         previewer.use_frames(listed);
     }
     if gif {
+        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
+        if turntable {
+            return write_turntable(&mut previewer, frame, &look, out).map(|_| ());
+        }
         let frames: Vec<u32> = previewer
             .frame_files()?
             .into_iter()
             .map(|(n, _)| n)
             .collect();
-        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        }
         return write_gif(&mut previewer, &frames, &look, fps, out).map(|_| ());
     }
     let pixels = previewer.image(frame, &look, None)?;

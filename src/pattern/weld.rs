@@ -1,8 +1,9 @@
-//! Welding a sewn garment for export: each seam's vertex pairs become one vertex, so that the
-//! panels form one connected mesh (DCC tools' Subdivision and Solidify keep it closed). The
-//! simulation keeps the panels apart, joined by seam forces; this is only what the files say.
+//! Welding a sewn garment for export and display: each seam's vertex pairs become one vertex,
+//! so that the panels form one connected mesh (DCC tools' Subdivision and Solidify keep it
+//! closed, and shading runs smooth across seams). The simulation keeps the panels apart, joined
+//! by seam forces; this is only what the files and pictures show.
 
-use crate::pattern::garment::Garment;
+use super::garment::Garment;
 use glam::{Vec2, Vec3};
 
 /// Welded vertices: which particles each one joins, and the triangles over them.
