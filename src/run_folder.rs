@@ -26,10 +26,12 @@ pub struct Inputs {
     pub texture: Option<String>,
 }
 
-/// `path` made absolute against the current directory (without resolving links, so that it
-/// names the file as the user reached it).
+/// `path` as an absolute path without `.` or `..` (the file's canonical path when it exists;
+/// else made absolute against the current directory).
 pub fn absolute(path: &Path) -> PathBuf {
-    std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
+    std::fs::canonicalize(path)
+        .or_else(|_| std::path::absolute(path))
+        .unwrap_or_else(|_| path.to_path_buf())
 }
 
 fn shown(path: &Path) -> String {
