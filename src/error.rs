@@ -33,6 +33,25 @@ pub enum Error {
         /// The operating system's error.
         source: std::io::Error,
     },
+    /// Writing an output file failed (a full disk, a lost permission); its temporary file was
+    /// removed, so nothing half-written is left.
+    #[error(
+        "cannot write {file} in {}: {source}{}; nothing half-written was left there",
+        dir.display(),
+        if source.kind() == std::io::ErrorKind::StorageFull {
+            " (the disk is full: free space on it, or write fewer frames)"
+        } else {
+            ""
+        }
+    )]
+    Write {
+        /// The file's name.
+        file: String,
+        /// The folder it was to be written in.
+        dir: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
     /// Some items of a batch failed; each recorded its error in its own folder (exit 4).
     #[error("{0}")]
     ItemsFailed(String),
@@ -52,7 +71,7 @@ impl Error {
             Error::Interrupted { .. } => 130,
             Error::ItemsFailed(_) => 4,
             Error::Warnings(_) => 5,
-            Error::Gpu(_) | Error::Io { .. } => 1,
+            Error::Gpu(_) | Error::Io { .. } | Error::Write { .. } => 1,
         }
     }
 

@@ -305,7 +305,8 @@ fn execute(command: Command) -> Result<(), Error> {
             drapekit::progress::enable(!quiet);
             if strict {
                 // Implausible inputs stop a strict run before its long part.
-                let found = drapekit::health::scene_warnings(&scene)?;
+                let mut found = drapekit::health::scene_warnings(&scene)?;
+                found.extend(drapekit::model::budget::load_warnings(&scene));
                 if !found.is_empty() {
                     for w in &found {
                         eprintln!("drapekit: warning: {w}");
@@ -391,7 +392,12 @@ fn execute(command: Command) -> Result<(), Error> {
         Command::Plan { scene, json } => {
             let scene = Scene::load(&scene)?;
             drapekit::progress::enable(!json);
+            for w in drapekit::model::budget::load_warnings(&scene) {
+                eprintln!("drapekit: warning: {w}");
+            }
             let prep = drapekit::sim::prepare(&scene)?;
+            // What `drapekit run` would write into the scene's output folder, and whether it fits.
+            let output = drapekit::export::disk::check_space(&scene, &prep, &scene.output.dir, 0)?;
             let coarse_start = match &scene.cloth {
                 drapekit::scene::ClothSource::Pattern { coarse_start, .. } => *coarse_start,
                 _ => None,
@@ -410,6 +416,16 @@ fn execute(command: Command) -> Result<(), Error> {
                 "dt": prep.params.dt,
                 "stable_dt_estimate_s": prep.stable_dt,
                 "dt_limited_by": prep.dt_limited_by,
+                "implicit_solve": prep.plan.contains(drapekit::plan::Pass::VbdSolve).then(|| {
+                    let shape = drapekit::plan::SolveShape::for_run(&prep.model, &prep.params, &prep.plan);
+                    serde_json::json!({
+                        "shape": shape,
+                        "level_particles": prep.model.multigrid.as_ref().map(|m| m.sizes()),
+                        "operations_per_substep": drapekit::plan::implicit_schedule(shape).len(),
+                    })
+                }),
+                "output_frames": output.frames,
+                "output_bytes_estimate": output.bytes(),
             });
             if json {
                 println!(
@@ -429,6 +445,12 @@ fn execute(command: Command) -> Result<(), Error> {
                         "from the scene"
                     }
                 );
+                println!(
+                    "  writes about {} ({} frames) into {}",
+                    drapekit::export::disk::size(output.bytes()),
+                    output.frames,
+                    scene.output.dir.display()
+                );
                 if let Some(d) = coarse_start {
                     println!(
                         "  starts from the garment meshed at {d:.3} m, sewn and draped until it \
@@ -443,6 +465,9 @@ fn execute(command: Command) -> Result<(), Error> {
                         pass.name(),
                         pass.name()
                     );
+                }
+                if prep.plan.contains(drapekit::plan::Pass::VbdSolve) {
+                    println!("  {}", describe_solve(&prep));
                 }
             }
             Ok(())
@@ -582,5 +607,29 @@ fn stop_on_ctrl_c() {
     });
     if let Err(e) = installed {
         eprintln!("drapekit: warning: Ctrl-C will not write a checkpoint: {e}");
+    }
+}
+
+/// How implicit Euler solves each substep, in one line for `drapekit plan`.
+fn describe_solve(prep: &drapekit::sim::Prepared) -> String {
+    let shape = drapekit::plan::SolveShape::for_run(&prep.model, &prep.params, &prep.plan);
+    match &prep.model.multigrid {
+        None => format!(
+            "implicit solve: {} Vertex Block Descent sweeps per substep",
+            shape.iterations
+        ),
+        Some(m) => {
+            let levels: Vec<String> = m.sizes().iter().map(|n| n.to_string()).collect();
+            format!(
+                "implicit solve: {} Newton step(s) per substep, each after {} sweeps: conjugate \
+                 gradients ({} iterations) preconditioned by a multigrid V-cycle over {} \
+                 particles, then a line search; {} final sweeps",
+                shape.iterations,
+                shape.smoothing,
+                shape.linear_iterations,
+                levels.join(" → "),
+                shape.smoothing
+            )
+        }
     }
 }

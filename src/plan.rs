@@ -356,10 +356,7 @@ impl SolveShape {
                 .multigrid
                 .as_ref()
                 .map_or(0, |m| m.levels.len() as u32),
-            linear_iterations: std::env::var("DK_LINEAR")
-                .ok()
-                .and_then(|v| v.parse().ok())
-                .unwrap_or(LINEAR_ITERATIONS),
+            linear_iterations: LINEAR_ITERATIONS,
             bodies: plan.contains(Pass::CollideBody) && params.num_bodies > 0,
             tolerance: params.tolerance > 0.0,
         }

@@ -242,6 +242,11 @@ fn run_scene_from(
     for w in &input_warnings {
         eprintln!("drapekit: warning: {w}");
     }
+    // Values that compute but no real scene has: said before anything slow starts.
+    let load_warnings = crate::model::budget::load_warnings(&scene);
+    for w in &load_warnings {
+        eprintln!("drapekit: warning: {w}");
+    }
     let (device, backend_note) = choose_device(opts.backend, &opts.adapter)?;
     if let Some(ctx) = &device {
         // Refused from the scene alone, before anything is built or baked.
@@ -253,6 +258,9 @@ fn run_scene_from(
         // The estimate cannot see an OBJ cloth's size; the built model can.
         crate::model::budget::check_model_textures(&scene, &prep.model, ctx.max_texels())?;
     }
+    // Refused before anything is simulated or written: the files must fit the disk.
+    let from_frame = resume.as_ref().map_or(0, |c| c.header.frame);
+    crate::export::disk::check_space(&scene, &prep, &out_dir, from_frame)?;
     let mut solver = build_solver(&prep, device.as_ref())?;
     if let Some(note) = &backend_note {
         eprintln!("drapekit: {note}");
@@ -269,7 +277,7 @@ fn run_scene_from(
     for w in &warnings {
         eprintln!("drapekit: warning: {w}");
     }
-    warnings.splice(0..0, input_warnings);
+    warnings.splice(0..0, input_warnings.into_iter().chain(load_warnings));
     // Before the output folder exists: a coarse start that cannot settle is bad input. A
     // resumed run continues from its checkpoint, past any coarse start.
     let coarse = match (&scene.cloth, &resume) {
@@ -290,6 +298,16 @@ fn run_scene_from(
             out_dir.display()
         );
     }
+    let temporaries = crate::atomic_file::remove_stale_temporaries(&out_dir);
+    if !temporaries.is_empty() {
+        eprintln!(
+            "drapekit: removed {} temporary file(s) a stopped run left in {}: {}",
+            temporaries.len(),
+            out_dir.display(),
+            temporaries.join(", ")
+        );
+    }
+
     let mut outputs = Vec::new();
     if resume.is_none() {
         outputs.push(crate::run_folder::write_scene_copy(&out_dir, &scene)?);
@@ -477,6 +495,11 @@ fn run_scene_from(
             let frames = stats.frames_run - stats.coarse_start.as_ref().map_or(0, |c| c.frame);
             stats.iterations_run as f64 / (frames as f64 * prep.substeps as f64).max(1.0)
         }),
+        newton_steps_mean: prep.model.multigrid.as_ref().map(|_| {
+            let frames = stats.frames_run - stats.coarse_start.as_ref().map_or(0, |c| c.frame);
+            stats.newton_steps_run as f64 / (frames as f64 * prep.substeps as f64).max(1.0)
+        }),
+        multigrid_levels: prep.model.multigrid.as_ref().map(|m| m.sizes()),
         colors: prep.colors,
         max_residual: stats.max_residual,
         force_residual_max: stats.force_residual.map(|r| r.0),
@@ -553,9 +576,39 @@ fn run_scene_from(
         error: result.as_ref().err().map(|e| e.to_string()),
         outputs,
     };
+    finish_summary(summary, result, &out_dir)
+}
+
+/// Writes `summary.json` and returns the run's result: its own error first (a frame that could
+/// not be written is the cause, a summary that then could not be written the consequence),
+/// and a summary number that is not finite (JSON would show it as `null`) as an unstable run.
+fn finish_summary(
+    mut summary: Summary,
+    result: Result<(), Error>,
+    out_dir: &std::path::Path,
+) -> Result<Summary, Error> {
+    let non_finite = summary.non_finite_fields();
+    let result = result.and_then(|()| match non_finite.is_empty() {
+        true => Ok(()),
+        false => Err(Error::Unstable(format!(
+            "the run produced non-finite values in the summary ({}), written there as null",
+            non_finite.join(", ")
+        ))),
+    });
+    if let Err(e) = &result {
+        summary.finite &= non_finite.is_empty();
+        summary.error.get_or_insert_with(|| e.to_string());
+    }
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
-    write_atomic(&out_dir.join("summary.json"), json.as_bytes())?;
-    result.map(|_| summary)
+    let written = write_atomic(&out_dir.join("summary.json"), json.as_bytes());
+    match (result, written) {
+        (Err(e), Err(w)) => {
+            eprintln!("drapekit: also: {w}");
+            Err(e)
+        }
+        (Err(e), Ok(())) | (Ok(()), Err(e)) => Err(e),
+        (Ok(()), Ok(())) => Ok(summary),
+    }
 }
 
 /// `--frames N` for `scene`: at least one frame (frame 0 is the start, not a simulated frame).

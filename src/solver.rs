@@ -89,6 +89,8 @@ pub struct SolveProgress {
     pub relative_residual: f32,
     /// Iterations (sweeps over every colour) run since the previous report.
     pub iterations: u64,
+    /// Newton steps run since the previous report (0 without coarse levels).
+    pub newton_steps: u64,
     /// The last substep's force residual |f|/(m·g) over the free particles at its end:
     /// largest and RMS.
     pub force_residual: (f32, f32),

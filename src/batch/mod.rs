@@ -10,6 +10,7 @@
 
 pub mod item;
 pub mod manifest;
+pub mod origin;
 pub mod overrides;
 pub mod report;
 pub mod shard;

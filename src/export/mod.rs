@@ -4,6 +4,7 @@
 //! mesh). The caches need every written frame, so they are kept in memory and written at the
 //! end.
 
+pub mod disk;
 pub mod glb;
 pub mod obj;
 pub mod pc2;

@@ -627,6 +627,7 @@ impl Solver for GpuSolver {
         Ok(Some(crate::solver::SolveProgress {
             relative_residual: crate::solver::relative_residual(&steps),
             force_residual: (0.0, 0.0),
+            newton_steps: 0,
             iterations: iterations as u64,
         }))
     }

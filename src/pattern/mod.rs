@@ -3,6 +3,7 @@
 //! See docs/src/patterns.md for the fields drapekit reads.
 
 pub mod curve;
+pub mod duplicates;
 mod format;
 pub mod garment;
 pub mod mesher;
@@ -238,7 +239,8 @@ impl Pattern {
     /// ```
     pub fn parse(text: &str, path: &Path) -> Result<Pattern, InputError> {
         let r = Reader { path };
-        let root: Value = serde_json::from_str(&non_finite_tokens_to_null(text)).map_err(|e| {
+        let text = &non_finite_tokens_to_null(text);
+        let root: Value = serde_json::from_str(text).map_err(|e| {
             if let Some(format) = format::foreign_format(path, text.as_bytes()) {
                 let (problem, fix) = format::foreign_format_message(format);
                 return InputError::new(path, "", problem, fix);
@@ -251,6 +253,26 @@ impl Pattern {
             )
             .at_line(Some(e.line()))
         })?;
+        // serde_json keeps the last of two equal keys: two panels of one name would lose one.
+        if let Some(d) = duplicates::first_duplicate(text) {
+            let problem = match d.parent.as_deref() {
+                Some("panels") => format!("two panels are named '{}'", d.key),
+                Some(parent) => format!("the key \"{}\" appears twice in \"{parent}\"", d.key),
+                None => format!("the key \"{}\" appears twice", d.key),
+            };
+            let location = match d.parent.as_deref() {
+                Some("panels") => format!("panel '{}'", d.key),
+                _ => String::new(),
+            };
+            return Err(InputError::new(
+                path,
+                location,
+                problem,
+                "give every panel (and every key of an object) its own name: the second would \
+                 silently replace the first",
+            )
+            .at_line(Some(d.line)));
+        }
         let props = root.get("properties");
         let units_in_meter = match props.and_then(|p| p.get("units_in_meter")) {
             None => 100.0,

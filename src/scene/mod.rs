@@ -5,6 +5,7 @@
 mod body;
 mod cloth;
 mod fabric;
+pub mod limits;
 mod pins;
 mod presets;
 mod preview;
@@ -167,7 +168,7 @@ impl Scene {
                 "add [solver] settle_speed_m_s (such as 0.005), or remove coarse_start_distance_m",
             ));
         }
-        Ok(Scene {
+        let scene = Scene {
             path: path.to_path_buf(),
             source: src.to_string(),
             cloth,
@@ -182,7 +183,10 @@ impl Scene {
             solver,
             output,
             preview,
-        })
+        };
+        // Derived quantities (masses, stiffness, steps), in f64, before anything is f32.
+        limits::check(&c, &scene)?;
+        Ok(scene)
     }
 
     /// The validation context of this scene's file, to report errors found after parsing.

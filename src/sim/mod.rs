@@ -432,6 +432,9 @@ pub struct RunStats {
     /// Iterations the implicit solve ran, over every substep.
     #[serde(default)]
     pub iterations_run: u64,
+    /// Newton steps the implicit solve ran, over every substep.
+    #[serde(default)]
+    pub newton_steps_run: u64,
     /// With the strain-limiting stage on: the edges at its cap (stretched to within 0.1% of it
     /// or past it) at the last frame, which the cap, not the solve, holds.
     #[serde(default)]
@@ -642,6 +645,7 @@ pub fn simulate_from(
             let r = p.relative_residual;
             stats.max_residual = Some(stats.max_residual.map_or(r, |m| m.max(r)));
             stats.iterations_run += p.iterations;
+            stats.newton_steps_run += p.newton_steps;
             stats.force_residual = Some(p.force_residual);
         }
         stats.max_speed = stats.max_speed.max(health.max_speed);
