@@ -225,7 +225,7 @@ fn run_scene_from(
 ) -> Result<Summary, Error> {
     let mut scene = scene.clone();
     if let Some(frames) = opts.frames {
-        scene.solver.frames = check_frames(&scene, frames)?;
+        scene.solver.frames = crate::health::inputs::check_frames(&scene, frames)?;
     }
     let out_dir = opts
         .out_dir
@@ -291,13 +291,6 @@ fn run_scene_from(
         _ => None,
     };
     crate::run_folder::clear(&out_dir, &stale)?;
-    if !stale.is_empty() {
-        eprintln!(
-            "drapekit: replaced the {} files of the previous run in {}",
-            stale.len(),
-            out_dir.display()
-        );
-    }
     let temporaries = crate::atomic_file::remove_stale_temporaries(&out_dir);
     if !temporaries.is_empty() {
         eprintln!(
@@ -434,16 +427,9 @@ fn run_scene_from(
             previews.frame_written(last);
         }
     }
-    let show_through = (last_state.as_ref())
-        .and_then(|state| crate::health::show_through(&prep, &state.positions, last));
-    if result.is_ok() {
-        let found =
-            crate::health::result_warnings(&prep, &stats, show_through.as_ref(), result.is_ok());
-        for w in &found {
-            eprintln!("drapekit: warning: {w}");
-        }
-        warnings.extend(found);
-    }
+    let positions = last_state.as_ref().map(|state| &state.positions[..]);
+    let (show_through, found) = crate::health::last_frame(&prep, &stats, positions, last);
+    warnings.extend(found);
     let checkpoint_name = crate::checkpoint::CHECKPOINT_FILE.to_string();
     if out_dir.join(&checkpoint_name).is_file() && !outputs.contains(&checkpoint_name) {
         outputs.push(checkpoint_name);
@@ -609,19 +595,6 @@ fn finish_summary(
         (Err(e), Ok(())) | (Ok(()), Err(e)) => Err(e),
         (Ok(()), Ok(())) => Ok(summary),
     }
-}
-
-/// `--frames N` for `scene`: at least one frame (frame 0 is the start, not a simulated frame).
-fn check_frames(scene: &Scene, frames: u32) -> Result<u32, Error> {
-    if frames == 0 {
-        return Err(Error::Input(crate::error::InputError::new(
-            &scene.path,
-            "--frames",
-            "0 output frames simulate nothing (frame 0 is the starting state)",
-            "give --frames 1 or more, or leave it out to run the scene's solver.frames",
-        )));
-    }
-    Ok(frames)
 }
 
 /// Sews and drapes `scene`'s garment at `distance` spacing until it settles (or its frames

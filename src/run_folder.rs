@@ -127,7 +127,7 @@ pub fn check(dir: &Path, scene: &Scene, overwrite: bool) -> Result<Vec<PathBuf>,
     )))
 }
 
-/// Creates `dir` and removes `old` (from `check`) from it.
+/// Creates `dir` and removes `old` (from `check`) from it, saying so on stderr.
 pub fn clear(dir: &Path, old: &[PathBuf]) -> Result<(), Error> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     for path in old {
@@ -135,6 +135,13 @@ pub fn clear(dir: &Path, old: &[PathBuf]) -> Result<(), Error> {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(Error::io(path, e)),
             _ => {}
         }
+    }
+    if !old.is_empty() {
+        eprintln!(
+            "drapekit: replaced the {} files of the previous run in {}",
+            old.len(),
+            dir.display()
+        );
     }
     Ok(())
 }

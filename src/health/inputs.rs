@@ -163,6 +163,19 @@ fn short(v: f64) -> String {
     s.to_string()
 }
 
+/// `--frames N` for `scene`: at least one frame (frame 0 is the start, not a simulated frame).
+pub fn check_frames(scene: &Scene, frames: u32) -> Result<u32, crate::error::Error> {
+    if frames == 0 {
+        return Err(crate::error::Error::Input(crate::error::InputError::new(
+            &scene.path,
+            "--frames",
+            "0 output frames simulate nothing (frame 0 is the starting state)",
+            "give --frames 1 or more, or leave it out to run the scene's solver.frames",
+        )));
+    }
+    Ok(frames)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,4 +8,4 @@ pub mod result;
 pub use crate::metrics::ShowThrough;
 pub use block::block;
 pub use inputs::{input_warnings, scene_warnings};
-pub use result::{result_warnings, show_through};
+pub use result::{last_frame, result_warnings, show_through};

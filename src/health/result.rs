@@ -5,6 +5,26 @@ use crate::metrics::{body_distances, ShowThrough};
 use crate::sim::{Prepared, RunStats};
 use glam::Vec4;
 
+/// The checks of a run's last frame, output frame `frame` at `positions` (`None` when the run
+/// stopped on an error: nothing is checked): where a body shows through, and the result's
+/// warnings, each printed on stderr as found.
+pub fn last_frame(
+    prep: &Prepared,
+    stats: &RunStats,
+    positions: Option<&[Vec4]>,
+    frame: u32,
+) -> (Option<ShowThrough>, Vec<String>) {
+    let Some(positions) = positions else {
+        return (None, Vec::new());
+    };
+    let inside = show_through(prep, positions, frame);
+    let found = result_warnings(prep, stats, inside.as_ref(), true);
+    for w in &found {
+        eprintln!("drapekit: warning: {w}");
+    }
+    (inside, found)
+}
+
 /// The body shows through wherever the cloth's surface lies inside it, however shallow: the
 /// body's surface is then in front of the cloth's in any render. Particles rest at the
 /// collision thickness, so it is the flat triangles between them that cut in. Measured at the
