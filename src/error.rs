@@ -1,5 +1,6 @@
 //! Errors, split by who must act: bad input (the user fixes a file, exit 2), an unstable
-//! simulation (the user changes the scene, exit 3), and environment failures (exit 1).
+//! simulation (the user changes the scene, exit 3), warnings under `--strict` (exit 5), and
+//! environment failures (exit 1).
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -50,17 +51,22 @@ pub enum Error {
     /// Some items of a batch failed; each recorded its error in its own folder (exit 4).
     #[error("{0}")]
     ItemsFailed(String),
+    /// `--strict`, and the run had warnings (exit 5); a finished run wrote its results first.
+    #[error("{0}")]
+    Warnings(String),
 }
 
 impl Error {
     /// Process exit code for this error: 2 for bad input, 3 for an unstable run, 4 for a batch
-    /// with failed items, 130 for an interrupted run (the shell's code for SIGINT), 1 otherwise.
+    /// with failed items, 5 for warnings under `--strict`, 130 for an interrupted run (the
+    /// shell's code for SIGINT), 1 otherwise.
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Input(_) => 2,
             Error::Unstable(_) => 3,
             Error::Interrupted { .. } => 130,
             Error::ItemsFailed(_) => 4,
+            Error::Warnings(_) => 5,
             Error::Gpu(_) | Error::Io { .. } | Error::Write { .. } => 1,
         }
     }

@@ -144,6 +144,21 @@ pub fn mesh_warnings(model: &ClothModel, check_duplicates: bool) -> Vec<String> 
     warnings
 }
 
+/// Where a body shows through the cloth at the last frame: cloth that lies inside a body, at
+/// its particles or at its triangles' centres (a triangle can cut into the body between
+/// particles that are all outside it).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ShowThrough {
+    /// Particles inside a body.
+    pub particles: usize,
+    /// Triangles whose centre is inside a body (by any depth).
+    pub triangles: usize,
+    /// The cloth's triangles.
+    pub of_triangles: usize,
+    /// The deepest of those points inside a body, in m.
+    pub deepest_m: f32,
+}
+
 #[cfg(test)]
 mod quantile_tests {
     use super::*;

@@ -7,8 +7,10 @@ use serde::Serialize;
 /// `summary.json`. Field names are stable: later versions add fields, never rename them.
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
-    /// The scene file.
+    /// The scene file, as an absolute path (its text is `scene.toml` in the output folder).
     pub scene: String,
+    /// Every file the run read, as absolute paths.
+    pub inputs: crate::run_folder::Inputs,
     /// "cpu" or "gpu".
     pub backend: String,
     /// Why the backend differs from the one asked for, if it does.
@@ -118,6 +120,9 @@ pub struct Summary {
     /// Particles resting on a body at the last frame: outside it and within the collision
     /// thickness plus 1 mm of its exact surface.
     pub body_contacts: Option<usize>,
+    /// Where a body shows through the cloth at the last frame (`null` without a body, or when
+    /// the run stopped on an error).
+    pub body_show_through: Option<crate::metrics::ShowThrough>,
     /// The (first) body's SDF: grid, bake time, memory, cache.
     pub sdf: Option<crate::body::sdf::BakeReport>,
     /// Every body's SDF, in scene order (empty without a body).

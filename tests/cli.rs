@@ -61,9 +61,9 @@ fn run_writes_frames_and_a_complete_summary() {
         summary["passes"],
         serde_json::json!(["hinge_forces", "spring_forces", "integrate", "strain_limit"])
     );
-    // Frames 0..=3 plus the summary, and each listed file exists.
+    // The scene's copy, frames 0..=3 and the summary, and each listed file exists.
     let outputs = summary["outputs"].as_array().unwrap();
-    assert_eq!(outputs.len(), 5);
+    assert_eq!(outputs.len(), 6);
     for f in outputs {
         assert!(out.join(f.as_str().unwrap()).is_file(), "{f} missing");
     }

@@ -37,6 +37,7 @@ fn a_write_that_fails_names_its_file_and_leaves_nothing() {
         frames: Some(12),
         progress: false,
         checkpoint_every: Some(1),
+        overwrite: false,
     };
     // A frame file of this cloth is about 100 KB and a checkpoint about 35 KB: the disk
     // fills in the middle of the fourth or fifth frame file.

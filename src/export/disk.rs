@@ -68,10 +68,13 @@ pub fn estimate(scene: &Scene, prep: &Prepared, from: u32) -> OutputEstimate {
                 body.triangles.len() as u64,
                 false,
             );
+            // One OBJ either way; a moving body's motion goes to body.glb: its mesh once
+            // (positions and normals, 24 bytes a vertex; 12 a triangle) and a time, a rotation
+            // and a translation (32 bytes) a written frame.
+            once += bytes;
             if c.motion.moves() {
-                per_frame += bytes;
-            } else {
-                once += bytes;
+                once += 24 * body.positions.len() as u64 + 12 * body.triangles.len() as u64;
+                per_frame += 32;
             }
         }
     }

@@ -277,6 +277,7 @@ pub(super) struct RawOutput {
     pub(super) pc2: Option<bool>,
     pub(super) gltf: Option<bool>,
     pub(super) formats: Option<Vec<String>>,
+    pub(super) weld_seams: Option<bool>,
 }
 
 fn default_every() -> i64 {
@@ -296,6 +297,7 @@ impl Default for RawOutput {
             pc2: None,
             gltf: None,
             formats: None,
+            weld_seams: None,
         }
     }
 }
@@ -325,8 +327,7 @@ fn default_fov() -> f64 {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawPreview {
     pub(super) camera: Option<RawCamera>,
-    #[serde(default = "default_strain_max")]
-    pub(super) strain_max: f64,
+    pub(super) strain_max: Option<f64>,
     #[serde(default)]
     pub(super) seams: bool,
     #[serde(default = "default_preview_size")]
@@ -337,26 +338,27 @@ pub(super) struct RawPreview {
     #[serde(default)]
     pub(super) colors: Vec<String>,
     pub(super) checker_m: Option<f64>,
+    pub(super) texture: Option<String>,
+    pub(super) texture_size_m: Option<[f64; 2]>,
 }
 
 impl Default for RawPreview {
     fn default() -> Self {
         RawPreview {
             camera: None,
-            strain_max: default_strain_max(),
+            strain_max: None,
             seams: false,
             size: default_preview_size(),
             animation: None,
             animation_size: default_animation_size(),
             colors: Vec::new(),
             checker_m: None,
+            texture: None,
+            texture_size_m: None,
         }
     }
 }
 
-fn default_strain_max() -> f64 {
-    super::preview::DEFAULT_STRAIN_MAX as f64
-}
 fn default_preview_size() -> [i64; 2] {
     [1280, 960]
 }

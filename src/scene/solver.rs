@@ -103,6 +103,9 @@ pub struct OutputSettings {
     pub pc2: bool,
     /// Write the written frames as an animated glTF binary, `garment.glb`.
     pub gltf: bool,
+    /// Weld each seam's vertex pairs into one vertex in the glTF binary, so that a sewn
+    /// garment is one connected mesh.
+    pub weld_seams: bool,
 }
 
 /// Validates `[solver]`.
@@ -280,6 +283,7 @@ pub(super) fn parse_output(
         obj,
         pc2,
         gltf,
+        weld_seams: raw.weld_seams.unwrap_or(true),
     })
 }
 
