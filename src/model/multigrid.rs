@@ -344,7 +344,7 @@ mod tests {
                 }
             }
         }
-        for ci in 0..n {
+        for (ci, row) in dense.iter_mut().enumerate().take(n) {
             for b in level.pattern.offsets[ci]..level.pattern.offsets[ci + 1] {
                 let cj = level.pattern.columns[b as usize] as usize;
                 let (s, e) = (
@@ -357,10 +357,10 @@ mod tests {
                     .sum();
                 // f32 weight products summed in f64: 1e-6 relative.
                 assert!(
-                    (sum - dense[ci][cj]).abs() < 1e-6 * (1.0 + dense[ci][cj].abs()),
+                    (sum - row[cj]).abs() < 1e-6 * (1.0 + row[cj].abs()),
                     "({ci}, {cj})"
                 );
-                dense[ci][cj] = 0.0;
+                row[cj] = 0.0;
             }
         }
         // Nothing of the product lies outside the coarse pattern.
