@@ -2,10 +2,10 @@
 
 mod common;
 
+use drapekit::gpu::implicit::{Include, SolveKernel};
 use drapekit::gpu::kernels::{
     compose, compose_with, validate_wgsl, ForceInput, VbdEnergies, COMMON_WGSL,
 };
-use drapekit::gpu::implicit::{Include, SolveKernel};
 use drapekit::plan::Pass;
 
 #[test]

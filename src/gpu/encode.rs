@@ -29,12 +29,16 @@ impl GpuSolver {
                     timestamp_writes: None,
                 });
                 for k in 0..batch.len() {
-                    let substep_offset = self.substeps.as_ref().map(|sb| (k as u64 * sb.stride) as u32);
+                    let substep_offset = self
+                        .substeps
+                        .as_ref()
+                        .map(|sb| (k as u64 * sb.stride) as u32);
                     for &pass in passes {
                         if pass == Pass::VbdSolve {
-                            let solve = self.implicit.as_ref().ok_or_else(|| {
-                                Error::Gpu("vbd_solve is not in the plan".into())
-                            })?;
+                            let solve = self
+                                .implicit
+                                .as_ref()
+                                .ok_or_else(|| Error::Gpu("vbd_solve is not in the plan".into()))?;
                             let offset = substep_offset.expect("the solve has substep params");
                             solve.encode(&mut cpass, self.current, offset);
                             continue;

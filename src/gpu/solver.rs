@@ -206,7 +206,10 @@ impl GpuSolver {
                 let shared = Shared {
                     ctx,
                     params: &params_buf,
-                    substeps: &substeps.as_ref().expect("the solve has substep params").buffer,
+                    substeps: &substeps
+                        .as_ref()
+                        .expect("the solve has substep params")
+                        .buffer,
                     pos: &pos,
                     labels: &mut labels,
                 };

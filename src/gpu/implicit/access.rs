@@ -50,8 +50,8 @@ impl GpuSolver {
         let b = &s.buffers;
         let n = s.n as usize;
         let level = |l: u32| -> Result<(usize, usize), Error> {
-            let lv = (s.levels.get(l as usize))
-                .ok_or_else(|| Error::Gpu(format!("no level {l}")))?;
+            let lv =
+                (s.levels.get(l as usize)).ok_or_else(|| Error::Gpu(format!("no level {l}")))?;
             Ok((lv.vec_base as usize, lv.rows as usize))
         };
         let whole = |buffer: &wgpu::Buffer| (buffer.size() / 16) as usize;
@@ -86,14 +86,17 @@ impl GpuSolver {
             return Err(Error::Gpu(format!("{array:?} holds {len} entries")));
         }
         let bytes = bytemuck::cast_slice(data);
-        self.ctx.queue.write_buffer(buffer, 16 * start as u64, bytes);
+        self.ctx
+            .queue
+            .write_buffer(buffer, 16 * start as u64, bytes);
         Ok(())
     }
 
     /// The blocks of a level's matrix (level 0: the fine Hessian), in its pattern's order.
     pub fn solve_blocks(&self, level: u32) -> Result<Vec<Mat3>, Error> {
         let s = self.solve()?;
-        let lv = (s.levels.get(level as usize)).ok_or_else(|| Error::Gpu("no such level".into()))?;
+        let lv =
+            (s.levels.get(level as usize)).ok_or_else(|| Error::Gpu("no such level".into()))?;
         let words = self.read_u32(&s.buffers.blocks)?;
         let all: &[GpuMat3] = bytemuck::cast_slice(&words);
         let range = lv.block_base as usize..(lv.block_base + lv.blocks) as usize;
@@ -103,7 +106,8 @@ impl GpuSolver {
     /// Overwrites the blocks of a level's matrix.
     pub fn set_solve_blocks(&mut self, level: u32, blocks: &[Mat3]) -> Result<(), Error> {
         let s = self.solve()?;
-        let lv = (s.levels.get(level as usize)).ok_or_else(|| Error::Gpu("no such level".into()))?;
+        let lv =
+            (s.levels.get(level as usize)).ok_or_else(|| Error::Gpu("no such level".into()))?;
         let data: Vec<GpuMat3> = blocks.iter().map(|m| to_gpu(*m)).collect();
         let at = 48 * lv.block_base as u64;
         (self.ctx.queue).write_buffer(&s.buffers.blocks, at, bytemuck::cast_slice(&data));
@@ -144,7 +148,10 @@ impl GpuSolver {
         self.ctx.check()?;
         let ctx = self.ctx.clone();
         let parity = self.current;
-        let substeps = self.substeps.as_ref().expect("the solve has substep params");
+        let substeps = self
+            .substeps
+            .as_ref()
+            .expect("the solve has substep params");
         ctx.queue
             .write_buffer(&substeps.buffer, 0, bytemuck::bytes_of(step));
         let solve = self

@@ -91,9 +91,10 @@ impl Builder<'_> {
     /// The `coarse_cycle` entry of a level operation whose rows are few enough.
     fn cycle_entry(&self, op: SolveOp) -> Option<[u32; 4]> {
         let (entry, rows) = match op {
-            SolveOp::Smooth { level, backward } => {
-                ([CYCLE_SMOOTH, level, backward as u32, 0], self.level(level).rows)
-            }
+            SolveOp::Smooth { level, backward } => (
+                [CYCLE_SMOOTH, level, backward as u32, 0],
+                self.level(level).rows,
+            ),
             SolveOp::Residual { level } => ([CYCLE_RESIDUAL, level, 0, 0], self.level(level).rows),
             SolveOp::Restrict { to } => ([CYCLE_RESTRICT, to, 0, 0], self.level(to).rows),
             SolveOp::Prolong { from } => ([CYCLE_PROLONG, from, 0, 0], self.level(from - 1).rows),

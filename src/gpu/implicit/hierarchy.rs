@@ -105,7 +105,10 @@ pub fn pack(model: &ClothModel) -> Packed {
             vec_base: rows,
             block_base: blocks,
             blocks: header[14],
-            colours: colour_offsets.windows(2).map(|w| (w[0], w[1] - w[0])).collect(),
+            colours: colour_offsets
+                .windows(2)
+                .map(|w| (w[0], w[1] - w[0]))
+                .collect(),
         });
         rows += header[0];
         blocks += header[14];

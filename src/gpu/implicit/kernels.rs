@@ -360,7 +360,9 @@ impl SolveKernel {
             SolveKernel::Sweep => vec![(Steps, true)],
             SolveKernel::Assemble => vec![(Blocks, true), (Force, true)],
             SolveKernel::CoarseOperator => vec![(Blocks, true)],
-            SolveKernel::PcgStart => vec![(Force, false), (Correction, true), (Rhs, true), (E, true)],
+            SolveKernel::PcgStart => {
+                vec![(Force, false), (Correction, true), (Rhs, true), (E, true)]
+            }
             SolveKernel::PcgDot | SolveKernel::PcgDirection => vec![
                 (P, true),
                 (Rhs, false),
@@ -368,7 +370,9 @@ impl SolveKernel {
                 (Partials, true),
                 (Scalars, true),
             ],
-            SolveKernel::PcgMatVec => vec![(Blocks, false), (P, false), (Ap, true), (Partials, true)],
+            SolveKernel::PcgMatVec => {
+                vec![(Blocks, false), (P, false), (Ap, true), (Partials, true)]
+            }
             SolveKernel::PcgStep => vec![
                 (Correction, true),
                 (P, false),

@@ -228,12 +228,19 @@ impl ImplicitSolve {
         let mut kinds = vec![Elements::Springs];
         kinds.extend(energies.bending.then_some(Elements::Hinges));
         kinds.extend(energies.seams.then_some(Elements::Seams));
-        kinds.extend(kernels.contains(&SolveKernel::ContactPlanes).then_some(Elements::Sdf));
+        kinds.extend(
+            kernels
+                .contains(&SolveKernel::ContactPlanes)
+                .then_some(Elements::Sdf),
+        );
         for kind in kinds {
             for (label, format, bytes) in element_arrays(model, kind) {
                 labels.push(label);
                 let none = wgpu::TextureUsages::empty();
-                textures.push((label, TexelArray::with_data(ctx, label, format, &bytes, none)?));
+                textures.push((
+                    label,
+                    TexelArray::with_data(ctx, label, format, &bytes, none)?,
+                ));
             }
         }
         let texture = |label: &str| {
@@ -319,7 +326,11 @@ impl ImplicitSolve {
     }
 
     /// The dispatches of `ops` run alone, their new `OpParams` entries uploaded.
-    fn dispatches_for(&mut self, ctx: &GpuContext, ops: &[SolveOp]) -> Result<Vec<Dispatch>, Error> {
+    fn dispatches_for(
+        &mut self,
+        ctx: &GpuContext,
+        ops: &[SolveOp],
+    ) -> Result<Vec<Dispatch>, Error> {
         let max_x = self.max_groups_x;
         let groups = move |threads: u32| dispatch_for(threads, max_x);
         let mut builder = Builder {
@@ -330,10 +341,14 @@ impl ImplicitSolve {
             cg: 0,
         };
         let dispatches = builder.expand(ops);
-        if self.tables.params.len() > self.capacity.0 || self.tables.op_list.len() > self.capacity.1 {
+        if self.tables.params.len() > self.capacity.0 || self.tables.op_list.len() > self.capacity.1
+        {
             return Err(Error::Gpu("too many operations run alone".into()));
         }
-        if let Some(d) = dispatches.iter().find(|d| !self.pipelines.contains_key(&d.kernel)) {
+        if let Some(d) = dispatches
+            .iter()
+            .find(|d| !self.pipelines.contains_key(&d.kernel))
+        {
             return Err(Error::Gpu(format!(
                 "{} is not in this solver's schedule",
                 d.kernel.file()
@@ -362,7 +377,11 @@ fn check_storage_limit(
 ) -> Result<(), Error> {
     let limit = ctx.device.limits().max_storage_buffers_per_shader_stage;
     for &k in kernels {
-        let used = k.binds(energies).iter().filter(|(r, _)| r.is_storage()).count() as u32;
+        let used = k
+            .binds(energies)
+            .iter()
+            .filter(|(r, _)| r.is_storage())
+            .count() as u32;
         if used > limit {
             return Err(Error::Gpu(format!(
                 "implicit Euler's {} kernel binds {used} storage buffers, but this device allows \
