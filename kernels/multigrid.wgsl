@@ -1,12 +1,11 @@
 // One row of each operation on a level's linear system A·e = rhs (the Newton step's
 // preconditioner): a block Gauss–Seidel update, the residual, restriction and prolongation.
-// Composed (after hierarchy.wgsl) into smooth, level_residual, restrict and prolong, which run
+// Composed (after hierarchy.wgsl and block_texels.wgsl) into smooth, level_residual, restrict and prolong, which run
 // one operation over a level's rows per dispatch, and into coarse_cycle, which runs a list of
 // them on small levels in one workgroup. Every level's rows are concatenated in rhs, e and res
 // (at the level's vec_base); level 0's rhs is conjugate gradients' residual r and its e the
 // preconditioned residual z. CPU twins: src/cpu/smooth.rs, restrict.rs, prolong.rs.
 
-@group(0) @binding(19) var<storage, read> blocks: array<mat3x3<f32>>;
 @group(0) @binding(24) var<storage, read_write> rhs: array<vec4<f32>>;
 @group(0) @binding(25) var<storage, read_write> e: array<vec4<f32>>;
 @group(0) @binding(26) var<storage, read_write> res: array<vec4<f32>>;
@@ -18,9 +17,9 @@ fn smooth_row(lv: Level, r: u32) -> vec3<f32> {
     let end = row_start(lv, r + 1u);
     var sum = rhs[lv.vec_base + r].xyz;
     for (var b = start + 1u; b < end; b = b + 1u) {
-        sum = sum - blocks[lv.block_base + b] * e[lv.vec_base + column(lv, b)].xyz;
+        sum = sum - block_at(lv.block_base + b) * e[lv.vec_base + block_column(lv, b)].xyz;
     }
-    return solve3(blocks[lv.block_base + start], sum);
+    return solve3(block_at(lv.block_base + start), sum);
 }
 
 // Row r's residual rhs_r − Σ_c A_rc·e_c.
@@ -29,7 +28,7 @@ fn residual_row(lv: Level, r: u32) -> vec3<f32> {
     let end = row_start(lv, r + 1u);
     var sum = rhs[lv.vec_base + r].xyz;
     for (var b = start; b < end; b = b + 1u) {
-        sum = sum - blocks[lv.block_base + b] * e[lv.vec_base + column(lv, b)].xyz;
+        sum = sum - block_at(lv.block_base + b) * e[lv.vec_base + block_column(lv, b)].xyz;
     }
     return sum;
 }

@@ -2,7 +2,6 @@
 // summed within each workgroup (tree_sum) for pcg_step's step length. CPU twin: pcg_matvec in
 // src/cpu/pcg.rs.
 
-@group(0) @binding(19) var<storage, read> blocks: array<mat3x3<f32>>;
 @group(0) @binding(22) var<storage, read> p: array<vec4<f32>>;
 @group(0) @binding(23) var<storage, read_write> ap: array<vec4<f32>>;
 @group(0) @binding(27) var<storage, read_write> partials: array<vec4<f32>>;
@@ -23,7 +22,7 @@ fn main(
         let fine = level(0u);
         var sum = vec3<f32>(0.0);
         for (var b = row_start(fine, i); b < row_start(fine, i + 1u); b = b + 1u) {
-            sum = sum + blocks[b] * p[column(fine, b)].xyz;
+            sum = sum + block_at(b) * p[block_column(fine, b)].xyz;
         }
         ap[i] = vec4<f32>(sum, 0.0);
         lane.x = dot(p[i].xyz, sum);

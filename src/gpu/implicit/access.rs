@@ -103,7 +103,7 @@ impl GpuSolver {
         Ok(all[range].iter().map(from_gpu).collect())
     }
 
-    /// Overwrites the blocks of a level's matrix.
+    /// Overwrites the blocks of a level's matrix (and their texels).
     pub fn set_solve_blocks(&mut self, level: u32, blocks: &[Mat3]) -> Result<(), Error> {
         let s = self.solve()?;
         let lv =
@@ -111,7 +111,9 @@ impl GpuSolver {
         let data: Vec<GpuMat3> = blocks.iter().map(|m| to_gpu(*m)).collect();
         let at = 48 * lv.block_base as u64;
         (self.ctx.queue).write_buffer(&s.buffers.blocks, at, bytemuck::cast_slice(&data));
-        Ok(())
+        let ctx = self.ctx.clone();
+        let solve = self.implicit.as_mut().expect("checked above");
+        solve.publish(&ctx, level)
     }
 
     /// The conjugate-gradient and line-search scalars.

@@ -88,6 +88,16 @@ impl Builder<'_> {
         &self.levels[l as usize]
     }
 
+    /// Copies a level's blocks, once written, to the texels the kernels read them from.
+    pub fn publish(&mut self, out: &mut Vec<Dispatch>, level: u32) {
+        let p = OpParams {
+            level,
+            ..Default::default()
+        };
+        let blocks = self.level(level).blocks;
+        self.push(out, SolveKernel::PublishBlocks, p, blocks);
+    }
+
     /// The `coarse_cycle` entry of a level operation whose rows are few enough.
     fn cycle_entry(&self, op: SolveOp) -> Option<[u32; 4]> {
         let (entry, rows) = match op {
@@ -166,10 +176,14 @@ impl Builder<'_> {
                     self.push(out, K::Sweep, p, count);
                 }
             }
-            SolveOp::Assemble => self.push(out, K::Assemble, plain, n),
+            SolveOp::Assemble => {
+                self.push(out, K::Assemble, plain, n);
+                self.publish(out, 0);
+            }
             SolveOp::CoarseOperator { level } => {
                 let blocks = self.level(level).blocks;
                 self.push(out, K::CoarseOperator, on_level(level), blocks);
+                self.publish(out, level);
             }
             SolveOp::PcgStart => {
                 self.cg = 0;

@@ -37,6 +37,8 @@ pub struct Packed {
     pub rows: u32,
     /// Blocks of all levels together.
     pub blocks: u32,
+    /// The column of every block of all levels, level after level.
+    pub columns: Vec<u32>,
 }
 
 /// `data` appended to `words`; returns where it starts.
@@ -70,6 +72,7 @@ pub fn pack(model: &ClothModel) -> Packed {
         words[3] = append(&mut words, b.seams.iter().flatten().copied());
     }
     let (mut rows, mut blocks) = (0u32, 0u32);
+    let mut columns = Vec::new();
     let mut levels = Vec::with_capacity(count);
     for l in 0..count {
         let (pattern, order, colour_offsets) = match l {
@@ -84,6 +87,7 @@ pub fn pack(model: &ClothModel) -> Packed {
         header[1] = rows;
         header[2] = append(&mut words, pattern.offsets.iter().copied());
         header[3] = append(&mut words, pattern.columns.iter().copied());
+        columns.extend(&pattern.columns);
         header[4] = blocks;
         header[5] = append(&mut words, order.iter().copied());
         header[6] = append(&mut words, colour_offsets.iter().copied());
@@ -118,5 +122,6 @@ pub fn pack(model: &ClothModel) -> Packed {
         levels,
         rows,
         blocks,
+        columns,
     }
 }

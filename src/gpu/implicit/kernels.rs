@@ -13,19 +13,27 @@ pub enum Include {
     Hierarchy,
     /// `kernels/implicit_terms.wgsl`: the incremental potential at one vertex.
     Terms,
+    /// `kernels/block_texels.wgsl`: every level's matrix blocks, read as texels.
+    BlockTexels,
     /// `kernels/multigrid.wgsl`: one row of each operation on a level's system.
     Multigrid,
 }
 
 impl Include {
     /// Every include.
-    pub const ALL: [Include; 3] = [Include::Hierarchy, Include::Terms, Include::Multigrid];
+    pub const ALL: [Include; 4] = [
+        Include::Hierarchy,
+        Include::Terms,
+        Include::BlockTexels,
+        Include::Multigrid,
+    ];
 
     /// Its file in `kernels/`, without `.wgsl`.
     pub fn file(self) -> &'static str {
         match self {
             Include::Hierarchy => "hierarchy",
             Include::Terms => "implicit_terms",
+            Include::BlockTexels => "block_texels",
             Include::Multigrid => "multigrid",
         }
     }
@@ -34,6 +42,7 @@ impl Include {
         match self {
             Include::Hierarchy => include_str!("../../../kernels/hierarchy.wgsl"),
             Include::Terms => include_str!("../../../kernels/implicit_terms.wgsl"),
+            Include::BlockTexels => include_str!("../../../kernels/block_texels.wgsl"),
             Include::Multigrid => include_str!("../../../kernels/multigrid.wgsl"),
         }
     }
@@ -108,6 +117,10 @@ pub enum Res {
     Steps = 29,
     /// The op lists of `coarse_cycle`.
     OpList = 30,
+    /// Every level's blocks as texels (a texture; written by `publish_blocks`).
+    BlockTexels = 31,
+    /// Every level's block columns (a texture).
+    BlockColumns = 32,
 }
 
 impl Res {
@@ -133,6 +146,8 @@ impl Res {
                 | Res::SeamRefs
                 | Res::Seams
                 | Res::Sdf
+                | Res::BlockTexels
+                | Res::BlockColumns
         )
     }
 }
@@ -184,11 +199,13 @@ pub enum SolveKernel {
     ForceResidual,
     /// `reduce_residual`.
     ReduceResidual,
+    /// `publish_blocks`: one level's blocks copied to their texels.
+    PublishBlocks,
 }
 
 impl SolveKernel {
     /// Every solve kernel.
-    pub const ALL: [SolveKernel; 20] = [
+    pub const ALL: [SolveKernel; 21] = [
         SolveKernel::ContactPlanes,
         SolveKernel::Sweep,
         SolveKernel::Assemble,
@@ -209,6 +226,7 @@ impl SolveKernel {
         SolveKernel::ApplyCorrection,
         SolveKernel::ForceResidual,
         SolveKernel::ReduceResidual,
+        SolveKernel::PublishBlocks,
     ];
 
     /// Its file in `kernels/`, without `.wgsl`.
@@ -233,6 +251,7 @@ impl SolveKernel {
             SolveKernel::ApplyCorrection => "apply_correction",
             SolveKernel::ForceResidual => "force_residual",
             SolveKernel::ReduceResidual => "reduce_residual",
+            SolveKernel::PublishBlocks => "publish_blocks",
         }
     }
 
@@ -269,6 +288,7 @@ impl SolveKernel {
             SolveKernel::ApplyCorrection => include_str!("../../../kernels/apply_correction.wgsl"),
             SolveKernel::ForceResidual => include_str!("../../../kernels/force_residual.wgsl"),
             SolveKernel::ReduceResidual => include_str!("../../../kernels/reduce_residual.wgsl"),
+            SolveKernel::PublishBlocks => include_str!("../../../kernels/publish_blocks.wgsl"),
         }
     }
 
@@ -281,12 +301,13 @@ impl SolveKernel {
             | SolveKernel::LineEnergy
             | SolveKernel::ForceResidual => &[Terms],
             SolveKernel::Sweep | SolveKernel::Assemble => &[Hierarchy, Terms],
-            SolveKernel::CoarseOperator | SolveKernel::PcgMatVec => &[Hierarchy],
+            SolveKernel::CoarseOperator | SolveKernel::PcgMatVec => &[Hierarchy, BlockTexels],
+            SolveKernel::PublishBlocks => &[Hierarchy],
             SolveKernel::Smooth
             | SolveKernel::LevelResidual
             | SolveKernel::Restrict
             | SolveKernel::Prolong
-            | SolveKernel::CoarseCycle => &[Hierarchy, Multigrid],
+            | SolveKernel::CoarseCycle => &[Hierarchy, BlockTexels, Multigrid],
             SolveKernel::PcgStart
             | SolveKernel::PcgDot
             | SolveKernel::PcgDirection
@@ -350,9 +371,8 @@ impl SolveKernel {
                         list.extend([(SeamOffsets, false), (SeamRefs, false), (Seams, false)]);
                     }
                 }
-                Include::Multigrid => {
-                    list.extend([(Blocks, false), (Rhs, true), (E, true), (Residual, true)])
-                }
+                Include::BlockTexels => list.extend([(BlockTexels, false), (BlockColumns, false)]),
+                Include::Multigrid => list.extend([(Rhs, true), (E, true), (Residual, true)]),
             }
         }
         list.extend(match self {
@@ -371,7 +391,7 @@ impl SolveKernel {
                 (Scalars, true),
             ],
             SolveKernel::PcgMatVec => {
-                vec![(Blocks, false), (P, false), (Ap, true), (Partials, true)]
+                vec![(P, false), (Ap, true), (Partials, true)]
             }
             SolveKernel::PcgStep => vec![
                 (Correction, true),
@@ -391,6 +411,7 @@ impl SolveKernel {
             }
             SolveKernel::ForceResidual => vec![(Partials, true)],
             SolveKernel::ReduceResidual => vec![(Partials, false)],
+            SolveKernel::PublishBlocks => vec![(Blocks, false), (BlockTexels, true)],
             SolveKernel::Smooth
             | SolveKernel::LevelResidual
             | SolveKernel::Restrict

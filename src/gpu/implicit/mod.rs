@@ -28,6 +28,7 @@ use dispatch::{Builder, Dispatch, Tables};
 use hierarchy::LevelInfo;
 use layout::{OpParams, SolveControl, SolveScalars};
 use std::collections::HashMap;
+use wgpu::TextureFormat::R32Uint;
 
 /// How the GPU runs the solve's level operations.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -85,6 +86,8 @@ pub struct ImplicitSolve {
     pub(super) buffers: SolveBuffers,
     /// The element and SDF textures the kernels bind (kept alive with their bind groups).
     _textures: Vec<TexelArray>,
+    /// Every level's blocks as texels (kept alive with the bind groups that hold them).
+    _block_texels: [TexelArray; 2],
     pipelines: HashMap<SolveKernel, KernelPipeline>,
     /// The substep's operations and their dispatches.
     schedule: Vec<SolveOp>,
@@ -223,6 +226,19 @@ impl ImplicitSolve {
         ctx.queue
             .write_buffer(&buffers.hier, 0, bytemuck::cast_slice(&packed.words));
 
+        labels.push("block_texels");
+        let block_texels = TexelArray::new(
+            ctx,
+            "block_texels",
+            wgpu::TextureFormat::Rgba32Float,
+            3 * per(packed.blocks as usize),
+            wgpu::TextureUsages::STORAGE_BINDING,
+        )?;
+        labels.push("block_columns");
+        let none = wgpu::TextureUsages::empty();
+        let columns: &[u32] = if newton { &packed.columns } else { &[] };
+        let bytes = bytemuck::cast_slice(columns);
+        let block_columns = TexelArray::with_data(ctx, "block_columns", R32Uint, bytes, none)?;
         // The element arrays, and every body's SDF for contact_planes.
         let mut textures = Vec::new();
         let mut kinds = vec![Elements::Springs];
@@ -253,6 +269,8 @@ impl ImplicitSolve {
             substeps: shared.substeps,
             pos: shared.pos,
             texture: &texture,
+            block_texels: &block_texels,
+            block_columns: &block_columns,
         };
         let pipelines = kernels
             .iter()
@@ -262,6 +280,7 @@ impl ImplicitSolve {
         let mut solve = ImplicitSolve {
             buffers,
             _textures: textures.into_iter().map(|(_, t)| t).collect(),
+            _block_texels: [block_texels, block_columns],
             pipelines,
             schedule,
             dispatches,
@@ -325,6 +344,30 @@ impl ImplicitSolve {
         }
     }
 
+    /// Encodes and submits the copy of a level's blocks to their texels (after the host wrote
+    /// the blocks).
+    pub(super) fn publish(&mut self, ctx: &GpuContext, level: u32) -> Result<(), Error> {
+        let max_x = self.max_groups_x;
+        let groups = move |threads: u32| dispatch_for(threads, max_x);
+        let mut builder = Builder {
+            levels: &self.levels,
+            small_rows: self.small_rows,
+            groups: &groups,
+            tables: &mut self.tables,
+            cg: 0,
+        };
+        let mut dispatches = Vec::new();
+        builder.publish(&mut dispatches, level);
+        self.check_dispatches(ctx, &dispatches)?;
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut cpass = encoder.begin_compute_pass(&Default::default());
+            self.encode_dispatches(&mut cpass, &dispatches, 0, 0);
+        }
+        ctx.queue.submit([encoder.finish()]);
+        Ok(())
+    }
+
     /// The dispatches of `ops` run alone, their new `OpParams` entries uploaded.
     fn dispatches_for(
         &mut self,
@@ -341,21 +384,25 @@ impl ImplicitSolve {
             cg: 0,
         };
         let dispatches = builder.expand(ops);
-        if self.tables.params.len() > self.capacity.0 || self.tables.op_list.len() > self.capacity.1
-        {
+        self.check_dispatches(ctx, &dispatches)?;
+        Ok(dispatches)
+    }
+
+    /// Whether the solver can run `dispatches` (its tables hold their entries, which are
+    /// uploaded, and it built their kernels).
+    fn check_dispatches(&mut self, ctx: &GpuContext, dispatches: &[Dispatch]) -> Result<(), Error> {
+        let (params, lists) = self.capacity;
+        if self.tables.params.len() > params || self.tables.op_list.len() > lists {
             return Err(Error::Gpu("too many operations run alone".into()));
         }
-        if let Some(d) = dispatches
-            .iter()
-            .find(|d| !self.pipelines.contains_key(&d.kernel))
-        {
+        if let Some(d) = (dispatches.iter()).find(|d| !self.pipelines.contains_key(&d.kernel)) {
             return Err(Error::Gpu(format!(
                 "{} is not in this solver's schedule",
                 d.kernel.file()
             )));
         }
         self.upload_tables(ctx);
-        Ok(dispatches)
+        Ok(())
     }
 }
 
@@ -400,6 +447,8 @@ struct Resources<'a> {
     substeps: &'a wgpu::Buffer,
     pos: &'a [TexelArray; 2],
     texture: &'a dyn Fn(&str) -> &'a TexelArray,
+    block_texels: &'a TexelArray,
+    block_columns: &'a TexelArray,
 }
 
 impl<'a> Resources<'a> {
@@ -439,6 +488,9 @@ impl<'a> Resources<'a> {
             Res::Scalars => storage(&b.scalars),
             Res::Steps => storage(&b.steps),
             Res::OpList => storage(&b.op_list),
+            Res::BlockTexels if writable => Binding::Write(self.block_texels),
+            Res::BlockTexels => Binding::Read(self.block_texels),
+            Res::BlockColumns => Binding::Read(self.block_columns),
         }
     }
 
