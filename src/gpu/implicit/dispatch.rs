@@ -14,8 +14,19 @@
 use super::hierarchy::LevelInfo;
 use super::kernels::SolveKernel;
 use super::layout::OpParams;
+use crate::model::layout::WORKGROUP_SIZE;
 use crate::plan::SolveOp;
 use std::collections::HashMap;
+
+/// Workgroups (x, y) for `threads` invocations: 2D past `max_x` per dimension.
+pub fn dispatch_for(threads: u32, max_x: u32) -> (u32, u32) {
+    let total = threads.div_ceil(WORKGROUP_SIZE).max(1);
+    if total <= max_x {
+        (total, 1)
+    } else {
+        (max_x, total.div_ceil(max_x))
+    }
+}
 
 /// `coarse_cycle`'s operations (as CYCLE_* in coarse_cycle.wgsl).
 const CYCLE_SMOOTH: u32 = 0;
@@ -69,8 +80,8 @@ pub struct Builder<'a> {
     pub levels: &'a [LevelInfo],
     /// Level operations over at most this many rows run in `coarse_cycle`.
     pub small_rows: u32,
-    /// Workgroups (x, y) for a dispatch over this many invocations.
-    pub groups: &'a dyn Fn(u32) -> (u32, u32),
+    /// The adapter's workgroups per dispatch dimension.
+    pub max_groups_x: u32,
     /// The entries the dispatches use.
     pub tables: &'a mut Tables,
     /// The conjugate-gradient iteration (its parity selects the r·z slot).
@@ -80,7 +91,7 @@ pub struct Builder<'a> {
 impl Builder<'_> {
     fn push(&mut self, out: &mut Vec<Dispatch>, kernel: SolveKernel, p: OpParams, threads: u32) {
         let op = self.tables.entry(p);
-        let groups = (self.groups)(threads);
+        let groups = dispatch_for(threads, self.max_groups_x);
         out.push(Dispatch { kernel, op, groups });
     }
 
