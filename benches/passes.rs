@@ -23,7 +23,7 @@ use std::time::{Duration, Instant};
 const SIZES: [u32; 3] = [64, 128, 256];
 /// Particle spacings in m of the pattern scene (its shipped 0.02 m, then finer).
 const SPACINGS: [f64; 3] = [0.02, 0.01, 0.005];
-/// Substeps per timed batch for single passes, and for whole substeps (the README's figure).
+/// Substeps per timed batch for single passes, and for whole substeps (the book's figure).
 const PASS_BATCH: u32 = 10;
 const SUBSTEP_BATCH: u32 = 100;
 

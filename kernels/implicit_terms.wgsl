@@ -92,6 +92,20 @@ struct VertexSystem {
     hessian: mat3x3<f32>,        // ∂²G/∂Dᵢ², in N/m
 }
 
+// A spring's stretch |e| − L for e = start + change, as (|start| − L) plus the change's share
+// (2·start·change + |change|²)/(|e| + |start|): smooth in the change down to its own rounding,
+// where |e| in f32 moves in steps of its ulp (CPU twin: stretch in src/cpu/implicit_terms.rs,
+// which says why).
+fn stretch(start: vec3<f32>, start_len: f32, change: vec3<f32>, len: f32, rest: f32) -> f32 {
+    let grow = 2.0 * dot(start, change) + dot(change, change);
+    let sum = len + start_len;
+    var share = 0.0;
+    if (sum > 0.0) {
+        share = grow / sum;
+    }
+    return (start_len - rest) + share;
+}
+
 // Vertex i's force and Hessian diagonal block at the iterate, with the contact of the first
 // `bodies` bodies (contact_planes asks for none); a pinned vertex's are zero. When
 // `assembling`, each off-diagonal block of the vertex's Hessian row is added to its slot of
@@ -121,7 +135,7 @@ fn vertex_system(i: u32, bodies: u32, assembling: bool) -> VertexSystem {
         let start_len = length(start);
         var block = mat3x3<f32>();
         if (len > 1e-12) {
-            f = f - s.stiffness * (len - s.rest_length) / len * e;
+            f = f - s.stiffness * stretch(start, start_len, change, len, s.rest_length) / len * e;
             block = block + spring_hessian(s.stiffness, s.rest_length, e, len);
         }
         if (start_len > 1e-12) {

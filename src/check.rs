@@ -47,6 +47,26 @@ fn key_line(src: &str, table: &str, key: &str) -> Option<usize> {
     header_line
 }
 
+/// Why a finite `v` cannot become an f32 (the solver's number type), if it cannot: beyond
+/// f32's largest value it would be infinite, and below its smallest normal value it would
+/// keep too few digits, or none.
+pub fn f32_range_problem(v: f64) -> Option<String> {
+    let a = v.abs();
+    if a > f32::MAX as f64 {
+        Some(format!(
+            "{v:e} is beyond the largest number the solver's 32-bit floats hold ({:e})",
+            f32::MAX
+        ))
+    } else if a != 0.0 && a < f32::MIN_POSITIVE as f64 {
+        Some(format!(
+            "{v:e} is below the smallest number the solver's 32-bit floats hold ({:e})",
+            f32::MIN_POSITIVE
+        ))
+    } else {
+        None
+    }
+}
+
 /// Validation context: the file and its text, for locations.
 pub struct Checker<'a> {
     /// The file being checked.
@@ -82,13 +102,18 @@ impl Checker<'_> {
             other => Err(self.err(
                 table,
                 key,
-                format!("unknown unit {other:?}"),
+                format!(
+                    "unknown unit {other:?}{}",
+                    crate::suggest::did_you_mean(other, ["m", "dm", "cm", "mm"])
+                ),
                 "use one of \"m\", \"dm\", \"cm\", \"mm\"",
             )),
         }
     }
 
-    /// `v` as f32, refusing NaN and infinities.
+    /// `v` as f32, refusing NaN and infinities, and values that f32 cannot hold: above its
+    /// largest (which would become infinite) or, other than zero, below its smallest normal
+    /// (which would lose their precision or become zero). The solver computes in f32.
     pub fn finite(&self, table: &str, key: &str, v: f64) -> Result<f32, InputError> {
         if !v.is_finite() {
             return Err(self.err(
@@ -96,6 +121,14 @@ impl Checker<'_> {
                 key,
                 format!("{v} is not a finite number"),
                 "write a finite decimal number",
+            ));
+        }
+        if let Some(problem) = f32_range_problem(v) {
+            return Err(self.err(
+                table,
+                key,
+                problem,
+                "check the value and its unit: no scene needs a number this large or small",
             ));
         }
         Ok(v as f32)

@@ -25,10 +25,29 @@ pub enum Error {
         dir: PathBuf,
     },
     /// Reading or writing a file failed.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {source}\n  fix: {}", path.display(), io_fix(path, source))]
     Io {
         /// The file that could not be read or written.
         path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// Writing an output file failed (a full disk, a lost permission); its temporary file was
+    /// removed, so nothing half-written is left.
+    #[error(
+        "cannot write {file} in {}: {source}{}; nothing half-written was left there",
+        dir.display(),
+        if source.kind() == std::io::ErrorKind::StorageFull {
+            " (the disk is full: free space on it, or write fewer frames)"
+        } else {
+            ""
+        }
+    )]
+    Write {
+        /// The file's name.
+        file: String,
+        /// The folder it was to be written in.
+        dir: PathBuf,
         /// The operating system's error.
         source: std::io::Error,
     },
@@ -46,7 +65,7 @@ impl Error {
             Error::Unstable(_) => 3,
             Error::Interrupted { .. } => 130,
             Error::ItemsFailed(_) => 4,
-            Error::Gpu(_) | Error::Io { .. } => 1,
+            Error::Gpu(_) | Error::Io { .. } | Error::Write { .. } => 1,
         }
     }
 
@@ -56,6 +75,37 @@ impl Error {
             path: path.to_path_buf(),
             source,
         }
+    }
+}
+
+/// What to do about an I/O error on `path`: the folder it is in, and the usual remedy for
+/// this kind of failure (an unwritable output folder is the common case).
+fn io_fix(path: &Path, source: &std::io::Error) -> String {
+    use std::io::ErrorKind as K;
+    let folder = if path.is_dir() {
+        path
+    } else {
+        path.parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."))
+    };
+    let folder = folder.display();
+    match source.kind() {
+        K::PermissionDenied | K::ReadOnlyFilesystem => format!(
+            "you may not write (or read) in {folder}: choose a folder you can write to (for a \
+             run's results, --out DIR), or change the folder's permissions"
+        ),
+        K::NotFound => format!("{folder} does not hold it: check the path"),
+        K::NotADirectory | K::AlreadyExists => format!(
+            "a file stands where a folder is needed on the way to {}: move it, or choose \
+             another folder with --out DIR",
+            path.display()
+        ),
+        K::StorageFull | K::QuotaExceeded | K::FileTooLarge => format!(
+            "the disk holding {folder} is full: free space there, or choose a folder on another \
+             disk with --out DIR"
+        ),
+        _ => format!("check that {folder} exists and that you may read and write in it"),
     }
 }
 
@@ -112,3 +162,31 @@ impl fmt::Display for InputError {
 }
 
 impl std::error::Error for InputError {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::{Error as IoError, ErrorKind};
+
+    #[test]
+    fn an_unwritable_output_folder_is_named_with_a_fix() {
+        let e = Error::io(
+            Path::new("/data/run/summary.json"),
+            IoError::from(ErrorKind::PermissionDenied),
+        );
+        let text = e.to_string();
+        assert!(
+            text.starts_with("/data/run/summary.json: permission denied"),
+            "{text}"
+        );
+        assert!(text.contains("fix: you may not write (or read) in /data/run: choose a folder you can write to (for a run's results, --out DIR)"), "{text}");
+        let full = Error::io(
+            Path::new("out/a.obj"),
+            IoError::from(ErrorKind::StorageFull),
+        );
+        assert!(
+            full.to_string().contains("the disk holding out is full"),
+            "{full}"
+        );
+    }
+}

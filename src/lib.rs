@@ -4,8 +4,8 @@
 //! The data path: [`scene::Scene`] → [`model::ClothModel`] → [`plan::PassPlan`] →
 //! a [`solver::Solver`] ([`gpu::GpuSolver`] or [`cpu::CpuSolver`]) → frames and a summary.
 //!
-//! Modules form layers that import only downward (README.md, "Architecture"): ground
-//! (`error`, `check`, `atomic_file`) → geometry (`mesh`, `pattern`, `body`) → `scene` →
+//! Modules form layers that import only downward (docs/src/architecture.md): ground
+//! (`error`, `check`, `atomic_file`, `suggest`, `toml_message`) → geometry (`mesh`, `pattern`, `body`) → `scene` →
 //! `model` → `plan` and `solver` → backends (`cpu`, `gpu`) and `metrics` → `sim` → outputs
 //! (`run`, `output`, `export`, `bench`, `plot`, `batch`) → the CLI.
 #![warn(missing_docs)]
@@ -32,5 +32,7 @@ pub mod run;
 pub mod scene;
 pub mod sim;
 pub mod solver;
+pub mod suggest;
+pub mod toml_message;
 
 pub use error::{Error, InputError};

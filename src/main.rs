@@ -55,6 +55,9 @@ enum Command {
         checkpoint_every: Option<u32>,
     },
     /// Continue a run from the checkpoint in its output folder (same scene, backend, adapter).
+    #[command(after_help = "Examples:\n  \
+        drapekit run fixtures/scenes/hanging_cloth.toml --checkpoint-every 12 --out out/hang\n  \
+        drapekit resume out/hang --frames 96   # continue, and run to frame 96")]
     Resume {
         /// The run's output folder (holding checkpoint.bin).
         dir: PathBuf,
@@ -142,7 +145,14 @@ enum Command {
 
 /// `drapekit batch MANIFEST --out DIR [...]`, or `drapekit batch report DIR`.
 #[derive(clap::Args)]
-#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+#[command(
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true,
+    after_help = "Examples:\n  \
+        drapekit batch fixtures/datasets/skirts_small.jsonl --out out/skirts_small --backend cpu\n  \
+        drapekit batch fixtures/datasets/skirts_small.jsonl --out out/skirts_small --shard 0/4\n  \
+        drapekit batch report out/skirts_small"
+)]
 struct BatchCli {
     #[command(subcommand)]
     report: Option<BatchCommand>,
@@ -328,7 +338,12 @@ fn execute(command: Command) -> Result<(), Error> {
         }
         Command::Plan { scene, json } => {
             let scene = Scene::load(&scene)?;
+            for w in drapekit::model::budget::load_warnings(&scene) {
+                eprintln!("drapekit: warning: {w}");
+            }
             let prep = drapekit::sim::prepare(&scene)?;
+            // What `drapekit run` would write into the scene's output folder, and whether it fits.
+            let output = drapekit::export::disk::check_space(&scene, &prep, &scene.output.dir, 0)?;
             let coarse_start = match &scene.cloth {
                 drapekit::scene::ClothSource::Pattern { coarse_start, .. } => *coarse_start,
                 _ => None,
@@ -347,6 +362,16 @@ fn execute(command: Command) -> Result<(), Error> {
                 "dt": prep.params.dt,
                 "stable_dt_estimate_s": prep.stable_dt,
                 "dt_limited_by": prep.dt_limited_by,
+                "implicit_solve": prep.plan.contains(drapekit::plan::Pass::VbdSolve).then(|| {
+                    let shape = drapekit::plan::SolveShape::for_run(&prep.model, &prep.params, &prep.plan);
+                    serde_json::json!({
+                        "shape": shape,
+                        "level_particles": prep.model.multigrid.as_ref().map(|m| m.sizes()),
+                        "operations_per_substep": drapekit::plan::implicit_schedule(shape).len(),
+                    })
+                }),
+                "output_frames": output.frames,
+                "output_bytes_estimate": output.bytes(),
             });
             if json {
                 println!(
@@ -366,6 +391,12 @@ fn execute(command: Command) -> Result<(), Error> {
                         "from the scene"
                     }
                 );
+                println!(
+                    "  writes about {} ({} frames) into {}",
+                    drapekit::export::disk::size(output.bytes()),
+                    output.frames,
+                    scene.output.dir.display()
+                );
                 if let Some(d) = coarse_start {
                     println!(
                         "  starts from the garment meshed at {d:.3} m, sewn and draped until it \
@@ -380,6 +411,9 @@ fn execute(command: Command) -> Result<(), Error> {
                         pass.name(),
                         pass.name()
                     );
+                }
+                if prep.plan.contains(drapekit::plan::Pass::VbdSolve) {
+                    println!("  {}", describe_solve(&prep));
                 }
             }
             Ok(())
@@ -489,9 +523,12 @@ fn report(summary: &drapekit::output::Summary, out_dir: &std::path::Path) {
         );
     }
     if let Some(s) = &summary.settled {
+        let residual = s.force_residual_rms.map_or(String::new(), |r| {
+            format!(", force residual {r:.2e} of the weight")
+        });
         println!(
-            "settled at frame {} ({} {:.2e} m/s)",
-            s.frame, s.rule, s.rms_speed_m_s
+            "settled at frame {} (RMS speed {:.2e} m/s{residual})",
+            s.frame, s.rms_speed_m_s
         );
     }
     println!(
@@ -512,5 +549,29 @@ fn stop_on_ctrl_c() {
     });
     if let Err(e) = installed {
         eprintln!("drapekit: warning: Ctrl-C will not write a checkpoint: {e}");
+    }
+}
+
+/// How implicit Euler solves each substep, in one line for `drapekit plan`.
+fn describe_solve(prep: &drapekit::sim::Prepared) -> String {
+    let shape = drapekit::plan::SolveShape::for_run(&prep.model, &prep.params, &prep.plan);
+    match &prep.model.multigrid {
+        None => format!(
+            "implicit solve: {} Vertex Block Descent sweeps per substep",
+            shape.iterations
+        ),
+        Some(m) => {
+            let levels: Vec<String> = m.sizes().iter().map(|n| n.to_string()).collect();
+            format!(
+                "implicit solve: {} Newton step(s) per substep, each after {} sweeps: conjugate \
+                 gradients ({} iterations) preconditioned by a multigrid V-cycle over {} \
+                 particles, then a line search; {} final sweeps",
+                shape.iterations,
+                shape.smoothing,
+                shape.linear_iterations,
+                levels.join(" → "),
+                shape.smoothing
+            )
+        }
     }
 }

@@ -3,6 +3,7 @@
 
 use crate::error::InputError;
 use glam::{Vec2, Vec3};
+use std::collections::HashMap;
 use std::path::Path;
 
 /// An indexed triangle mesh in metres.
@@ -149,6 +150,33 @@ impl TriMesh {
             ));
         }
         Ok(mesh)
+    }
+
+    /// Merges vertices at exactly the same position into the first of them, keeping the order
+    /// of first appearance, and returns how many were merged. OBJ exporters split a vertex
+    /// wherever its texture coordinate or normal changes (and between objects), which would
+    /// make a closed body look open along every UV seam.
+    pub fn weld_coincident(&mut self) -> usize {
+        let mut first: HashMap<[u32; 3], u32> = HashMap::with_capacity(self.positions.len());
+        let mut positions = Vec::with_capacity(self.positions.len());
+        let remap: Vec<u32> = self
+            .positions
+            .iter()
+            .map(|p| {
+                // Adding +0 turns −0 into +0, so that the two weld.
+                let key = (*p + Vec3::ZERO).to_array().map(f32::to_bits);
+                *first.entry(key).or_insert_with(|| {
+                    positions.push(*p);
+                    positions.len() as u32 - 1
+                })
+            })
+            .collect();
+        let merged = self.positions.len() - positions.len();
+        for t in &mut self.triangles {
+            *t = t.map(|i| remap[i as usize]);
+        }
+        self.positions = positions;
+        merged
     }
 
     /// Unique edges with their opposite vertices, sorted by endpoints for determinism.

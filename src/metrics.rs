@@ -16,6 +16,17 @@ pub fn max_edge_strain(positions: &[Vec4], springs: &[Spring]) -> f32 {
         .fold(0.0, f32::max)
 }
 
+/// The springs stretched by at least `strain` (0.1 = 10%).
+pub fn edges_stretched_past(positions: &[Vec4], springs: &[Spring], strain: f32) -> usize {
+    springs
+        .iter()
+        .filter(|s| {
+            let [a, b] = s.ends.map(|i| positions[i as usize].truncate());
+            a.distance(b) >= (1.0 + strain) * s.rest_length
+        })
+        .count()
+}
+
 /// The first particle with a non-finite position or velocity, and which of the two.
 pub fn first_non_finite(state: &ParticleState) -> Option<(usize, &'static str)> {
     for i in 0..state.positions.len() {

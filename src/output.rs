@@ -47,9 +47,14 @@ pub struct Summary {
     pub iterations: Option<u32>,
     /// `[solver] tolerance`, if any (implicit only).
     pub tolerance: Option<f32>,
-    /// Sweeps the solve ran per substep, on average (implicit only): `iterations` without a
-    /// tolerance, fewer with one.
+    /// Vertex Block Descent sweeps the solve ran per substep, on average (implicit only).
     pub iterations_mean: Option<f64>,
+    /// Newton steps the solve ran per substep, on average (implicit with coarse levels):
+    /// `iterations` without a tolerance, fewer with one.
+    pub newton_steps_mean: Option<f64>,
+    /// The particles of each level of the multigrid solve, the cloth's own first (implicit with
+    /// coarse levels; null for plain Vertex Block Descent).
+    pub multigrid_levels: Option<Vec<usize>>,
     /// Vertex colours, i.e. dispatches per sweep (implicit only).
     pub colors: Option<usize>,
     /// Largest relative residual over the last substep of every output frame (implicit only):
@@ -80,6 +85,9 @@ pub struct Summary {
     pub last_frame_max_edge_strain: f32,
     /// The strain-limiting stage's cap on edge stretch (0.1 = 10%), or null when it is off.
     pub strain_limit: Option<f32>,
+    /// With the cap on: the edges at it in the last frame (stretched to within 0.1% of the cap
+    /// or past it), which the cap holds rather than the solve.
+    pub strain_limit_clamped_edges: Option<usize>,
     /// Largest particle speed at any output frame, in m/s (from the `monitor` stage).
     pub max_speed_m_s: f32,
     /// Kinetic energy at the last good frame, in J.
@@ -132,4 +140,84 @@ pub struct Summary {
     pub error: Option<String>,
     /// Files written, relative to the output folder.
     pub outputs: Vec<String>,
+}
+
+impl Summary {
+    /// The fields (dotted paths) holding a non-finite number: see [`non_finite_fields`]. A
+    /// run checks this before writing the summary.
+    pub fn non_finite_fields(&self) -> Vec<String> {
+        non_finite_fields(self)
+    }
+}
+
+/// The fields (dotted paths) of `value` holding a non-finite number. JSON has no NaN:
+/// serde_json writes one as `null`, which reads as "not applicable". The value goes through a
+/// TOML value instead, which keeps NaN and infinities, so that every field is covered, also
+/// ones added later.
+pub fn non_finite_fields<T: Serialize>(value: &T) -> Vec<String> {
+    fn walk(v: &toml::Value, at: &str, out: &mut Vec<String>) {
+        match v {
+            toml::Value::Float(x) if !x.is_finite() => out.push(at.to_string()),
+            toml::Value::Array(items) => (items.iter().enumerate())
+                .for_each(|(i, item)| walk(item, &format!("{at}[{i}]"), out)),
+            toml::Value::Table(t) => t.iter().for_each(|(k, item)| {
+                let path = if at.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{at}.{k}")
+                };
+                walk(item, &path, out)
+            }),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    match toml::Value::try_from(value) {
+        Ok(v) => walk(&v, "", &mut out),
+        Err(e) => out.push(format!("(the values could not be checked: {e})")),
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Serialize)]
+    struct Inner {
+        speed: f64,
+        gaps: Vec<f32>,
+    }
+
+    #[derive(Serialize)]
+    struct Report {
+        name: &'static str,
+        step: Option<f32>,
+        absent: Option<f32>,
+        inner: Inner,
+        bodies: Vec<Inner>,
+    }
+
+    #[test]
+    fn every_non_finite_number_is_named_wherever_it_sits() {
+        let report = Report {
+            name: "x",
+            step: Some(f32::NAN),
+            absent: None,
+            inner: Inner {
+                speed: 1.0,
+                gaps: vec![0.0, f32::INFINITY],
+            },
+            bodies: vec![Inner {
+                speed: f64::NEG_INFINITY,
+                gaps: vec![],
+            }],
+        };
+        let mut found = non_finite_fields(&report);
+        found.sort();
+        assert_eq!(found, ["bodies[0].speed", "inner.gaps[1]", "step"]);
+        // serde_json would have hidden all three as null.
+        let json = serde_json::to_string(&report).unwrap();
+        assert_eq!(json.matches("null").count(), 4, "{json}");
+    }
 }

@@ -146,7 +146,7 @@ impl Pass {
 }
 
 /// How the plan evaluates dihedral hinges. Both ways exist on both backends (a kernel and its
-/// CPU twin each, with parity tests); each backend takes the one measured faster on it (README,
+/// CPU twin each, with parity tests); each backend takes the one measured faster on it (docs/src/benchmarks/throughput.md,
 /// "Benchmarks"), and the results agree to rounding (bit for bit on the CPU when bending is the
 /// only force after the springs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -356,10 +356,7 @@ impl SolveShape {
                 .multigrid
                 .as_ref()
                 .map_or(0, |m| m.levels.len() as u32),
-            linear_iterations: std::env::var("DK_LINEAR")
-                .ok()
-                .and_then(|v| v.parse().ok())
-                .unwrap_or(LINEAR_ITERATIONS),
+            linear_iterations: LINEAR_ITERATIONS,
             bodies: plan.contains(Pass::CollideBody) && params.num_bodies > 0,
             tolerance: params.tolerance > 0.0,
         }
@@ -407,25 +404,33 @@ pub fn implicit_schedule(shape: SolveShape) -> Vec<SolveOp> {
         if shape.tolerance {
             ops.extend([SolveOp::ForceResidual, SolveOp::CheckConverged]);
         }
-        ops.push(SolveOp::Assemble);
-        for level in 1..=shape.levels {
-            ops.push(SolveOp::CoarseOperator { level });
-        }
-        ops.push(SolveOp::PcgStart);
-        for k in 0..shape.linear_iterations {
-            v_cycle(&mut ops, shape.levels);
-            ops.push(SolveOp::PcgDirection { first: k == 0 });
-            ops.extend([SolveOp::PcgMatVec, SolveOp::PcgStep]);
-        }
-        ops.extend([
-            SolveOp::CorrectionFilter,
-            SolveOp::LineEnergy,
-            SolveOp::LineSearch,
-            SolveOp::ApplyCorrection,
-        ]);
+        ops.extend(newton_correction(shape));
     }
     sweeps(&mut ops, shape.smoothing);
     ops.push(SolveOp::ForceResidual);
+    ops
+}
+
+/// One Newton step's correction (after its sweeps): the fine system assembled, the coarse
+/// levels' Galerkin matrices, `linear_iterations` of conjugate gradients preconditioned by a
+/// V-cycle, and the line search along the filtered result.
+pub fn newton_correction(shape: SolveShape) -> Vec<SolveOp> {
+    let mut ops = vec![SolveOp::Assemble];
+    for level in 1..=shape.levels {
+        ops.push(SolveOp::CoarseOperator { level });
+    }
+    ops.push(SolveOp::PcgStart);
+    for k in 0..shape.linear_iterations {
+        v_cycle(&mut ops, shape.levels);
+        ops.push(SolveOp::PcgDirection { first: k == 0 });
+        ops.extend([SolveOp::PcgMatVec, SolveOp::PcgStep]);
+    }
+    ops.extend([
+        SolveOp::CorrectionFilter,
+        SolveOp::LineEnergy,
+        SolveOp::LineSearch,
+        SolveOp::ApplyCorrection,
+    ]);
     ops
 }
 

@@ -76,7 +76,7 @@ pub struct RunOptions {
 
 /// Creates the chosen backend; with `Auto`, falls back to the CPU and returns a note saying why.
 /// `Auto` with `--adapter auto` skips software adapters (`DeviceType::Cpu`): the multi-threaded
-/// CPU path measured faster than lavapipe (README, "Benchmarks"). Naming an adapter, or
+/// CPU path measured faster than lavapipe (docs/src/benchmarks/throughput.md). Naming an adapter, or
 /// `--backend gpu`, still runs it.
 pub fn make_solver(
     prep: &Prepared,
@@ -146,6 +146,30 @@ pub fn adapter_named(adapter: &AdapterChoice) -> bool {
 /// Runs a scene and writes its frames and `summary.json`. Bad input fails before anything is
 /// written. A run that goes non-finite still writes its summary (with `finite: false` and the
 /// error) before returning the error.
+///
+/// ```
+/// use drapekit::gpu::AdapterChoice;
+/// use drapekit::run::{run_scene, BackendChoice, RunOptions};
+/// use drapekit::scene::Scene;
+/// use std::path::Path;
+///
+/// let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+/// let scene = Scene::load(&dir.join("fixtures/scenes/drape_sphere.toml"))?;
+/// let out = std::env::temp_dir().join(format!("drapekit-doc-{}", std::process::id()));
+/// let options = RunOptions {
+///     backend: BackendChoice::Cpu,
+///     adapter: AdapterChoice::Auto,
+///     out_dir: Some(out.clone()),
+///     frames: Some(2),
+///     progress: false,
+///     checkpoint_every: None,
+/// };
+/// let summary = run_scene(&scene, &options)?;
+/// assert!(summary.finite);
+/// assert!(out.join("summary.json").exists() && out.join("frame_0002.obj").exists());
+/// # std::fs::remove_dir_all(&out).ok();
+/// # Ok::<(), drapekit::Error>(())
+/// ```
 pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary, Error> {
     run_scene_from(scene, opts, None)
 }
@@ -198,6 +222,11 @@ fn run_scene_from(
     if let Some(frames) = opts.frames {
         scene.solver.frames = frames;
     }
+    // Values that compute but no real scene has: said before anything slow starts.
+    let load_warnings = crate::model::budget::load_warnings(&scene);
+    for w in &load_warnings {
+        eprintln!("drapekit: warning: {w}");
+    }
     let (device, backend_note) = choose_device(opts.backend, &opts.adapter)?;
     if let Some(ctx) = &device {
         // Refused from the scene alone, before anything is built or baked.
@@ -209,6 +238,13 @@ fn run_scene_from(
         // The estimate cannot see an OBJ cloth's size; the built model can.
         crate::model::budget::check_model_textures(&scene, &prep.model, ctx.max_texels())?;
     }
+    let out_dir = opts
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| scene.output.dir.clone());
+    // Refused before anything is simulated or written: the files must fit the disk.
+    let from_frame = resume.as_ref().map_or(0, |c| c.header.frame);
+    crate::export::disk::check_space(&scene, &prep, &out_dir, from_frame)?;
     let mut solver = build_solver(&prep, device.as_ref())?;
     if let Some(note) = &backend_note {
         eprintln!("drapekit: {note}");
@@ -225,6 +261,7 @@ fn run_scene_from(
     for w in &warnings {
         eprintln!("drapekit: warning: {w}");
     }
+    warnings.extend(load_warnings);
     // Before the output folder exists: a coarse start that cannot settle is bad input. A
     // resumed run continues from its checkpoint, past any coarse start.
     let coarse = match (&scene.cloth, &resume) {
@@ -237,11 +274,16 @@ fn run_scene_from(
         ) => Some(coarse_start(&scene, *distance, device.as_ref(), &prep)?),
         _ => None,
     };
-    let out_dir = opts
-        .out_dir
-        .clone()
-        .unwrap_or_else(|| scene.output.dir.clone());
     std::fs::create_dir_all(&out_dir).map_err(|e| Error::io(&out_dir, e))?;
+    let stale = crate::atomic_file::remove_stale_temporaries(&out_dir);
+    if !stale.is_empty() {
+        eprintln!(
+            "drapekit: removed {} temporary file(s) a stopped run left in {}: {}",
+            stale.len(),
+            out_dir.display(),
+            stale.join(", ")
+        );
+    }
 
     let mut outputs = Vec::new();
     let mut stats = RunStats::default();
@@ -404,6 +446,11 @@ fn run_scene_from(
             let frames = stats.frames_run - stats.coarse_start.as_ref().map_or(0, |c| c.frame);
             stats.iterations_run as f64 / (frames as f64 * prep.substeps as f64).max(1.0)
         }),
+        newton_steps_mean: prep.model.multigrid.as_ref().map(|_| {
+            let frames = stats.frames_run - stats.coarse_start.as_ref().map_or(0, |c| c.frame);
+            stats.newton_steps_run as f64 / (frames as f64 * prep.substeps as f64).max(1.0)
+        }),
+        multigrid_levels: prep.model.multigrid.as_ref().map(|m| m.sizes()),
         colors: prep.colors,
         max_residual: stats.max_residual,
         force_residual_max: stats.force_residual.map(|r| r.0),
@@ -437,6 +484,7 @@ fn run_scene_from(
         last_frame_max_edge_strain: stats.last_edge_strain,
         strain_limit: (prep.plan.contains(crate::plan::Pass::StrainLimit))
             .then_some(prep.params.strain_limit),
+        strain_limit_clamped_edges: stats.strain_limit_clamped_edges,
         max_speed_m_s: stats.max_speed,
         kinetic_energy_j: stats.kinetic_energy_j,
         seams: stats.seam_gaps.len(),
@@ -478,9 +526,39 @@ fn run_scene_from(
         error: result.as_ref().err().map(|e| e.to_string()),
         outputs,
     };
+    finish_summary(summary, result, &out_dir)
+}
+
+/// Writes `summary.json` and returns the run's result: its own error first (a frame that could
+/// not be written is the cause, a summary that then could not be written the consequence),
+/// and a summary number that is not finite (JSON would show it as `null`) as an unstable run.
+fn finish_summary(
+    mut summary: Summary,
+    result: Result<(), Error>,
+    out_dir: &std::path::Path,
+) -> Result<Summary, Error> {
+    let non_finite = summary.non_finite_fields();
+    let result = result.and_then(|()| match non_finite.is_empty() {
+        true => Ok(()),
+        false => Err(Error::Unstable(format!(
+            "the run produced non-finite values in the summary ({}), written there as null",
+            non_finite.join(", ")
+        ))),
+    });
+    if let Err(e) = &result {
+        summary.finite &= non_finite.is_empty();
+        summary.error.get_or_insert_with(|| e.to_string());
+    }
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
-    write_atomic(&out_dir.join("summary.json"), json.as_bytes())?;
-    result.map(|_| summary)
+    let written = write_atomic(&out_dir.join("summary.json"), json.as_bytes());
+    match (result, written) {
+        (Err(e), Err(w)) => {
+            eprintln!("drapekit: also: {w}");
+            Err(e)
+        }
+        (Err(e), Ok(())) | (Ok(()), Err(e)) => Err(e),
+        (Ok(()), Ok(())) => Ok(summary),
+    }
 }
 
 /// Sews and drapes `scene`'s garment at `distance` spacing until it settles (or its frames

@@ -114,6 +114,7 @@ fn chain(n: usize, m: f32, k: f32, l0: f32, damping: f32) -> ClothModel {
         hinges: vec![],
         seams: vec![],
         colliders: Vec::new(),
+        multigrid: None,
     }
 }
 

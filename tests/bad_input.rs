@@ -1,6 +1,7 @@
-//! The bad-input corpus in fixtures/bad/: every file makes `drapekit run` exit with code 2, a
-//! message naming the file, the key (with its line where the format has one) and a fix, no
-//! panic, and no output folder.
+//! The bad-input corpus in fixtures/bad/: every file makes `drapekit run` exit with code 2 (or
+//! the code its `# exit:` line gives: 1 for a folder that cannot be written), a message naming
+//! the file, the key (with its line where the format has one) and a fix, no panic, and no output
+//! folder.
 
 mod common;
 
@@ -16,18 +17,30 @@ fn every_bad_scene_is_refused_cleanly() {
             continue;
         }
         let text = std::fs::read_to_string(&path).unwrap();
-        let expect = text
-            .lines()
-            .next()
-            .and_then(|l| l.strip_prefix("# expect: "))
-            .unwrap_or_else(|| panic!("{} lacks its '# expect: ' line", path.display()));
-        // "# backend: gpu" on the second line: a limit of the GPU path, checked on the
-        // fallback adapter.
-        let gpu = text.lines().nth(1) == Some("# backend: gpu");
+        let header = Header::read(&text);
+        assert!(
+            !header.expect.is_empty(),
+            "{} lacks its '# expect: ' line",
+            path.display()
+        );
+        // "# backend: gpu": a limit of the GPU path, checked on the fallback adapter.
+        let gpu = header.backend.as_deref() == Some("gpu");
         if gpu && common::gpu().is_none() {
             continue;
         }
-        let out = tempdir(&path);
+        // "# out: PATH": the run writes there instead of a fresh folder ({scene} is this file).
+        let given_out = header
+            .out
+            .as_ref()
+            .map(|o| std::path::PathBuf::from(o.replace("{scene}", path.to_str().unwrap())));
+        if given_out
+            .as_ref()
+            .is_some_and(|o| !o.parent().is_some_and(|p| p.exists()))
+        {
+            continue; // e.g. no /sys on this system
+        }
+        let out = given_out.clone().unwrap_or_else(|| tempdir(&path));
+        let existed = out.exists();
         let backend: &[&str] = if gpu {
             &["--backend", "gpu", "--adapter", "fallback"]
         } else {
@@ -43,19 +56,53 @@ fn every_bad_scene_is_refused_cleanly() {
         let name = path.file_name().unwrap().to_str().unwrap();
         assert_eq!(
             result.status.code(),
-            Some(2),
+            Some(header.exit),
             "{name}: exit code; stderr:\n{stderr}"
         );
-        assert!(
-            stderr.contains(expect),
-            "{name}: expected {expect:?} in:\n{stderr}"
-        );
+        for expect in &header.expect {
+            assert!(
+                stderr.contains(expect.as_str()),
+                "{name}: expected {expect:?} in:\n{stderr}"
+            );
+        }
         assert!(stderr.contains("fix:"), "{name}: no fix in:\n{stderr}");
         assert!(!stderr.contains("panicked"), "{name}: panicked:\n{stderr}");
-        assert!(!out.exists(), "{name}: wrote {}", out.display());
+        assert_eq!(out.exists(), existed, "{name}: wrote {}", out.display());
         checked += 1;
     }
     assert!(checked >= 13, "only {checked} bad scenes found");
+}
+
+/// The `# key: value` comment lines that open a corpus scene.
+#[derive(Default)]
+struct Header {
+    /// Texts the error must contain (`# expect:`, one or more).
+    expect: Vec<String>,
+    /// `# backend: gpu` for a limit of the GPU path.
+    backend: Option<String>,
+    /// `# out: PATH`, the output folder to give the run.
+    out: Option<String>,
+    /// `# exit: N`, the exit code (2, bad input, unless given).
+    exit: i32,
+}
+
+impl Header {
+    fn read(text: &str) -> Header {
+        let mut h = Header {
+            exit: 2,
+            ..Header::default()
+        };
+        for line in text.lines().map_while(|l| l.strip_prefix("# ")) {
+            match line.split_once(": ") {
+                Some(("expect", v)) => h.expect.push(v.to_string()),
+                Some(("backend", v)) => h.backend = Some(v.to_string()),
+                Some(("out", v)) => h.out = Some(v.to_string()),
+                Some(("exit", v)) => h.exit = v.parse().expect("# exit: takes a number"),
+                _ => break,
+            }
+        }
+        h
+    }
 }
 
 fn tempdir(scene: &std::path::Path) -> std::path::PathBuf {
@@ -145,21 +192,105 @@ fn particle_estimates_are_close_for_the_shipped_garments() {
 }
 
 #[test]
-fn an_oversized_grid_is_refused_in_well_under_a_second() {
+fn budgets_are_refused_in_well_under_a_second() {
+    // Each of these would take minutes, or abort, if it were built: a 64M-particle grid, a
+    // 400M-particle grid under a cap above the machine's memory, a 2.9 TB SDF, 4 billion OBJ
+    // frames. Process start, a TOML parse and a sphere's bounding box take milliseconds.
+    for (fixture, key) in [
+        ("grid_too_big.toml", "max_memory_mb"),
+        ("grid_beyond_machine_memory.toml", "more than it has"),
+        ("body_sdf_beyond_memory.toml", "sdf_resolution_m = "),
+        ("frames_beyond_disk.toml", "free on the disk"),
+    ] {
+        let start = std::time::Instant::now();
+        let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
+            .args([
+                "plan",
+                common::fixture(&format!("bad/{fixture}")).to_str().unwrap(),
+            ])
+            .output()
+            .unwrap();
+        let elapsed = start.elapsed().as_secs_f64();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{fixture}: {stderr}");
+        assert!(stderr.contains(key), "{fixture}: {stderr}");
+        assert!(elapsed < 1.0, "{fixture} took {elapsed} s");
+    }
+}
+
+#[test]
+fn a_unit_slip_is_warned_before_the_garment_is_meshed() {
+    // The T-shirt in cm read as metres (units_in_meter = 1) is 60 m across: 7.6 million
+    // particles at 2 cm. The warning names units_in_meter; the memory cap then refuses it
+    // before anything is meshed.
+    let work = std::env::temp_dir().join(format!("drapekit-units-{}", std::process::id()));
+    std::fs::create_dir_all(&work).unwrap();
+    let mut pattern: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(common::fixture("patterns/tshirt.json")).unwrap(),
+    )
+    .unwrap();
+    pattern["properties"]["units_in_meter"] = serde_json::json!(1);
+    std::fs::write(work.join("p.json"), pattern.to_string()).unwrap();
+    std::fs::write(
+        work.join("s.toml"),
+        "[cloth.pattern]\npath = \"p.json\"\nparticle_distance_m = 0.02\n[fabric]\n\
+         preset = \"cotton\"\n[solver]\nframes = 1\nmax_memory_mb = 512\n",
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .args(["plan", work.join("s.toml").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let warning = stderr.find("warning").expect("a warning");
+    assert!(
+        stderr[warning..].contains("units_in_meter = 1 the garment spans"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("larger than any garment"), "{stderr}");
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.find("max_memory_mb").unwrap() > warning, "{stderr}");
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+#[test]
+fn a_long_crossing_outline_is_found_in_seconds() {
+    // A thin panel 75 m long that folds over itself at the far end, meshed at 1 mm: 150,000
+    // outline particles. Testing every pair of segments took seconds (and 726 s for a typo's
+    // longer outline); the R-tree finds the crossing in a fraction of a second.
+    let work = std::env::temp_dir().join(format!("drapekit-cross-{}", std::process::id()));
+    std::fs::create_dir_all(&work).unwrap();
+    let pattern = serde_json::json!({
+        "properties": {"units_in_meter": 100},
+        "pattern": {"panels": {"strip": {
+            "vertices": [[0, 0], [7500, 0], [7490, 1], [7495, -1], [0, 1]],
+            "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 3]},
+                      {"endpoints": [3, 4]}, {"endpoints": [4, 0]}]
+        }}, "stitches": []}
+    });
+    std::fs::write(work.join("p.json"), pattern.to_string()).unwrap();
+    std::fs::write(
+        work.join("s.toml"),
+        "[cloth.pattern]\npath = \"p.json\"\nparticle_distance_m = 0.001\n[fabric]\n\
+         preset = \"cotton\"\n[solver]\nframes = 1\n",
+    )
+    .unwrap();
     let start = std::time::Instant::now();
     let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
-        .args([
-            "plan",
-            common::fixture("bad/grid_too_big.toml").to_str().unwrap(),
-        ])
+        .args(["plan", work.join("s.toml").to_str().unwrap()])
         .output()
         .unwrap();
     let elapsed = start.elapsed().as_secs_f64();
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("max_memory_mb"));
-    // Process start and a TOML parse take milliseconds; building 64M particles would take
-    // minutes and tens of GB.
-    assert!(elapsed < 1.0, "took {elapsed} s");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("panel 'strip': outline intersects itself"),
+        "{stderr}"
+    );
+    // Sampling 160,000 points and the test itself: well under a second; 3 s leaves room for
+    // a loaded machine.
+    assert!(elapsed < 3.0, "took {elapsed} s");
+    let _ = std::fs::remove_dir_all(&work);
 }
 
 #[test]

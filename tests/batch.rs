@@ -541,3 +541,48 @@ fn every_body_mesh_is_in_an_items_input_hash() {
     std::fs::write(dir.join("scenes/high.obj"), cube_obj(1.2)).unwrap();
     assert_ne!(load().inputs_sha256, before.inputs_sha256);
 }
+
+#[test]
+fn an_items_bad_input_is_located_in_the_file_that_holds_the_key() {
+    // Errors found while an item runs come from its merged scene, whose lines are neither
+    // file's: a key the overrides set is reported at the manifest's line, any other key at its
+    // own line in the scene file (write_scene puts `columns` on line 4).
+    let dir = workdir("located");
+    write_scene(&dir, "sheet.toml", 2);
+    let manifest = dir.join("manifest.jsonl");
+    std::fs::write(
+        &manifest,
+        "{\"id\": \"pin\", \"scene\": \"scenes/sheet.toml\", \"overrides\": {\"pins\": [{\"indices\": [5000]}]}}\n\
+         {\"id\": \"cap\", \"scene\": \"scenes/sheet.toml\", \"overrides\": {\"solver\": {\"max_memory_mb\": 0.01}}}\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = batch(&[
+        manifest.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--backend",
+        "cpu",
+    ]);
+    assert_eq!(o.status.code(), Some(4), "{}", text(&o));
+    let message = |id: &str| {
+        let e: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join(id).join("error.json")).unwrap())
+                .unwrap();
+        e["message"].as_str().unwrap().to_string()
+    };
+    let pin = message("pin");
+    assert!(
+        pin.starts_with(&format!(
+            "{}:1: item \"pin\": overrides.pins[0].indices",
+            manifest.display()
+        )),
+        "{pin}"
+    );
+    let cap = message("cap");
+    let scene = dir.join("scenes/sheet.toml");
+    assert!(
+        cap.starts_with(&format!("{}:4: cloth.grid.columns", scene.display())),
+        "{cap}"
+    );
+}

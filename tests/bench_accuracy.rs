@@ -1,6 +1,6 @@
 //! Smoke tests of `drapekit bench accuracy` and `drapekit bench effects` with `--quick` on a
 //! tiny scene: the commands finish, and their CSVs have the documented columns and finite
-//! values where the README says a value is there.
+//! values where the book says a value is there.
 
 mod common;
 

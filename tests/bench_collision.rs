@@ -31,7 +31,7 @@ fn bench_collision_quick_writes_every_strategy() {
     assert_eq!(
         header,
         documented_columns(),
-        "README.md and the CSV disagree"
+        "the book and the CSV disagree"
     );
     let by_name: HashMap<&str, &Row> = rows.iter().map(|r| (r["strategy"].as_str(), r)).collect();
     let mut expected = vec![
@@ -118,13 +118,16 @@ fn bench_collision_quick_writes_every_strategy() {
     );
 }
 
-/// The columns README.md documents for `collision.csv`, in order.
+/// The columns the book documents for `collision.csv`, in order.
 fn documented_columns() -> Vec<String> {
-    let readme =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
+    let readme = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/docs/src/benchmarks/collision.md"
+    ))
+    .unwrap();
     let from = readme
         .find("`collision.csv` columns:")
-        .expect("README documents the columns");
+        .expect("the book documents the columns");
     let text = &readme[from..];
     let end = text.find("`note`").expect("the list ends with note") + "`note`".len();
     text[..end]

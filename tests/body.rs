@@ -80,6 +80,59 @@ fn open_and_non_manifold_meshes_are_refused_and_flips_repaired() {
     assert!(signed_volume(&inside_out) > 0.0);
 }
 
+/// A cube exported as a DCC tool writes it: every face with its own texture coordinates, and
+/// two objects. OBJ loaders split such vertices; a body welds them back and is closed.
+#[test]
+fn a_closed_body_with_uv_seams_and_two_objects_loads() {
+    let corners = |i: usize| [(i >> 2) & 1, (i >> 1) & 1, i & 1].map(|b| b as f32 * 0.4 - 0.2);
+    let faces = [
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],
+    ];
+    let write = |faces: &[[usize; 4]]| {
+        let mut obj = String::new();
+        for i in 0..8 {
+            let [x, y, z] = corners(i);
+            obj += &format!("v {x} {y} {z}\n");
+        }
+        for k in 0..24 {
+            obj += &format!("vt {} {}\n", k as f32 / 24.0, (k % 4) as f32 / 4.0);
+        }
+        for (k, f) in faces.iter().enumerate() {
+            if k == 3 {
+                obj += "o second_half\n";
+            }
+            let corner = |j: usize| format!("{}/{}", f[j] + 1, 4 * k + j + 1);
+            obj += &format!(
+                "f {} {} {} {}\n",
+                corner(0),
+                corner(1),
+                corner(2),
+                corner(3)
+            );
+        }
+        obj
+    };
+    let dir = std::env::temp_dir().join(format!("drapekit-uv-cube-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("cube.obj");
+    std::fs::write(&path, write(&faces)).unwrap();
+    let body = Body::load(&path, 1.0, Vec3::ZERO, "body.path").unwrap();
+    assert_eq!(body.mesh.positions.len(), 8, "every corner welded once");
+    assert_eq!(body.mesh.triangles.len(), 12);
+    // 0.4 m cube: 0.064 m³, exact in f32 to ~1e-8.
+    assert!((signed_volume(&body.mesh) - 0.064).abs() < 1e-6);
+    // Welding joins only what coincides: a cube missing a face is still open.
+    std::fs::write(&path, write(&faces[..5])).unwrap();
+    let err = Body::load(&path, 1.0, Vec3::ZERO, "body.path").unwrap_err();
+    assert!(err.to_string().contains("open"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn sign_is_right_on_points_known_inside_and_outside() {
     for (name, body) in test_bodies() {

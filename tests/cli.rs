@@ -444,7 +444,7 @@ fn tshirt_drape_cotton_sews_rests_and_stays_out_of_the_body() {
     assert_eq!(summary["seams_closed"], summary["seams"], "{summary:#}");
     // The collision thickness is 3 mm; particles are measured against the exact mesh.
     assert!(f("max_penetration_m") <= 0.003, "{summary:#}");
-    // Woven cotton stretches a few percent in wear (README, "Fabric presets"): at rest no edge
+    // Woven cotton stretches a few percent in wear (docs/src/fabrics.md): at rest no edge
     // may be stretched past 5%. The CPU path gives the same bits on every machine and thread
     // count, so this is 2.86% wherever it runs; the strain limit (10%) is not what holds it.
     assert!(f("last_frame_max_edge_strain") <= 0.05, "{summary:#}");
@@ -458,7 +458,7 @@ fn tshirt_drape_cotton_sews_rests_and_stays_out_of_the_body() {
 
 #[test]
 fn every_subcommand_help_shows_an_example() {
-    for sub in ["run", "info", "preview", "plan", "bench"] {
+    for sub in ["run", "resume", "info", "preview", "plan", "batch", "bench"] {
         let out = drapekit(&[sub, "--help"]);
         assert!(out.status.success(), "{sub} --help");
         let text = String::from_utf8_lossy(&out.stdout);

@@ -73,7 +73,7 @@ impl Failure {
             Error::Input(_) => "bad_input",
             Error::Unstable(_) => "unstable",
             Error::Gpu(_) => "gpu",
-            Error::Io { .. } => "io",
+            Error::Io { .. } | Error::Write { .. } => "io",
             _ => "other",
         };
         Failure {
@@ -205,7 +205,7 @@ fn attempt(item: &Item, tmp: &Path, opts: &ItemOptions) -> Result<(), Failure> {
     }));
     match result {
         Ok(Ok(_)) => Ok(()),
-        Ok(Err(e)) => Err(Failure::from_error(&e)),
+        Ok(Err(e)) => Err(Failure::from_error(&super::origin::locate(item, e))),
         Err(panic) => Err(Failure {
             kind: "panic".into(),
             exit_code: 101,

@@ -19,6 +19,8 @@ const MAX_ID_LEN: usize = 128;
 /// One validated manifest item.
 #[derive(Clone, Debug)]
 pub struct Item {
+    /// The manifest file.
+    pub manifest: PathBuf,
     /// 1-based line in the manifest.
     pub line: usize,
     /// 0-based position among the manifest's items (blank lines do not count): its shard key.
@@ -82,7 +84,7 @@ impl Manifest {
             }
             lines += 1;
             let index = items.len() + bad.len();
-            match parse_line(line, line_no, index, base, &mut files) {
+            match parse_line(line, (path, line_no), index, base, &mut files) {
                 Ok(item) => {
                     // Case-insensitive: "A" and "a" are one folder on macOS and Windows.
                     let key = item.id.to_lowercase();
@@ -131,7 +133,7 @@ impl Manifest {
 /// Parses and validates one line; the error is the message after "line N: ".
 fn parse_line(
     line: &str,
-    line_no: usize,
+    (manifest, line_no): (&Path, usize),
     index: usize,
     base: &Path,
     files: &mut FileHashes,
@@ -235,6 +237,7 @@ fn parse_line(
         .unwrap_or("custom")
         .to_string();
     Ok(Item {
+        manifest: manifest.to_path_buf(),
         line: line_no,
         index,
         id,
@@ -270,7 +273,7 @@ fn load_scene(
         return Ok((Scene::parse(src, path).map_err(|e| e.to_string())?, table));
     }
     overrides::merge(&mut table, overrides, "")
-        .map_err(|e| format!("overrides: {e}\n  fix: see \"overrides\" in README.md"))?;
+        .map_err(|e| format!("overrides: {e}\n  fix: see \"overrides\" in docs/src/batches.md"))?;
     let merged = toml::to_string(&table).map_err(|e| format!("overrides: {e}"))?;
     // Relative paths in the scene (and in overrides) still resolve against the scene file.
     let scene = Scene::parse(&merged, path).map_err(|e| {

@@ -1,6 +1,6 @@
 //! `drapekit batch`: many scenes from a JSON Lines manifest, sharded over the processes of a
 //! cluster job (Slurm array, Kubernetes indexed Job), each item resumable and isolated from the
-//! others' failures. README.md, "Batches and clusters", is the user's guide.
+//! others' failures. docs/src/batches.md is the user's guide.
 //!
 //! - [`manifest`]: parse and validate the whole manifest, every bad line reported at once;
 //! - [`overrides`]: an item's overrides merged into its scene's tables;
@@ -10,6 +10,7 @@
 
 pub mod item;
 pub mod manifest;
+pub mod origin;
 pub mod overrides;
 pub mod report;
 pub mod shard;

@@ -8,7 +8,7 @@ use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-/// The columns of `batch.csv`, in order; README.md ("Batches and clusters") says what each holds.
+/// The columns of `batch.csv`, in order; docs/src/batches.md says what each holds.
 pub const COLUMNS: &[&str] = &[
     "id",
     "status",

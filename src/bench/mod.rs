@@ -5,6 +5,8 @@
 //! - [`integrators`]: one scene under symplectic and implicit Euler, on both backends;
 //! - [`accuracy`]: what accuracy costs in time, knob by knob, against a fine reference;
 //! - [`collision`]: every contact strategy on a skirt on a turning body, at three sizes;
+//! - [`convergence`]: implicit Euler's force residual against cost, plain sweeps against
+//!   Newton steps with a multigrid preconditioner, at three particle spacings;
 //! - [`effects`]: what each optional effect costs per substep, on both backends;
 //! - [`fabric`]: the fabric presets in the Cusick drape and cantilever bending tests, against
 //!   published values;
@@ -13,6 +15,7 @@
 
 pub mod accuracy;
 pub mod collision;
+pub mod convergence;
 pub mod effects;
 pub mod fabric;
 pub mod grid;

@@ -215,8 +215,9 @@ pub struct Body {
 }
 
 impl Body {
-    /// Loads an OBJ body scaled by `scale` (m per file unit) and shifted by `offset`, and checks
-    /// that it is closed and consistently oriented (repairing orientation where possible).
+    /// Loads an OBJ body scaled by `scale` (m per file unit) and shifted by `offset`, welds
+    /// vertices that share a position (UV seams, several objects), and checks that it is closed
+    /// and consistently oriented (repairing orientation where possible).
     pub fn load(
         path: &Path,
         scale: f32,
@@ -224,6 +225,7 @@ impl Body {
         key: &str,
     ) -> Result<Body, InputError> {
         let mut mesh = TriMesh::load_obj(path, scale, key)?;
+        mesh.weld_coincident();
         for p in &mut mesh.positions {
             *p += offset;
         }

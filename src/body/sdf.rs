@@ -86,13 +86,17 @@ pub fn grid_for(body: &Body, cell: f32, margin: f32) -> (Vec3, [u32; 3]) {
     );
     let origin = lo - Vec3::splat(margin);
     let size = hi - lo + Vec3::splat(2.0 * margin);
-    let n = (size / cell).ceil().as_uvec3() + 1;
-    (origin, [n.x, n.y, n.z])
+    // In f64 and saturating: a fine cell over a large body must be refused by its byte count,
+    // not wrap around to a small grid.
+    let nodes = |extent: f32| ((extent as f64 / cell as f64).ceil() + 1.0).min(u32::MAX as f64);
+    let n = [nodes(size.x), nodes(size.y), nodes(size.z)];
+    (origin, n.map(|d| d as u32))
 }
 
-/// Bytes of a grid with these dimensions.
+/// Bytes of a grid with these dimensions (saturating at `u64::MAX`).
 pub fn grid_bytes(dims: [u32; 3]) -> u64 {
-    4 * dims.iter().map(|&d| d as u64).product::<u64>()
+    dims.iter()
+        .fold(4u64, |bytes, &d| bytes.saturating_mul(d as u64))
 }
 
 impl Sdf {

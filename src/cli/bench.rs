@@ -71,6 +71,43 @@ enum BenchCommand {
     /// brute force) on a skirt on a turning body at three sizes; writes collision.csv,
     /// collision.md and collision.svg.
     Collision(CollisionArgs),
+    /// Implicit Euler's force residual against cost on one substep, plain Vertex Block Descent
+    /// sweeps against Newton steps with multigrid-preconditioned conjugate gradients, at the
+    /// scene's particle spacing and twice and four times finer; writes convergence.csv,
+    /// convergence.md and convergence.svg.
+    Convergence(ConvergenceArgs),
+}
+
+/// `drapekit bench convergence SCENE --out DIR`.
+#[derive(Args)]
+#[command(after_help = "Examples:\n  \
+    drapekit bench convergence fixtures/scenes/tshirt_drape_cotton.toml --out out/convergence\n  \
+    drapekit bench convergence fixtures/scenes/hanging_cloth.toml --quick --out out/convergence-quick")]
+struct ConvergenceArgs {
+    /// The scene file (TOML): implicit Euler, a pattern or grid cloth.
+    scene: PathBuf,
+    /// Output folder for convergence.csv, convergence.md and convergence.svg.
+    #[arg(long)]
+    out: PathBuf,
+    /// Frames to run before the measured substep: 0 measures the scene's first substep from its
+    /// initial state (default: until the scene settles, at most its frames; 12 with --quick).
+    #[arg(long)]
+    frames: Option<u32>,
+    /// Spacing divisors (default 1,2,4; 1,2 with --quick).
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=8))]
+    refinements: Vec<u32>,
+    /// The most plain sweeps (default 1024; 64 with --quick).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    max_sweeps: Option<u32>,
+    /// Frames a finer mesh runs from the carried state before its measured substep.
+    #[arg(long, default_value_t = 2)]
+    relax_frames: u32,
+    /// The most Newton steps (default 12; 3 with --quick).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    max_newton: Option<u32>,
+    /// Fewer frames, two spacings and short curves (a smoke test).
+    #[arg(long)]
+    quick: bool,
 }
 
 /// `drapekit bench collision --out DIR`.
@@ -128,7 +165,7 @@ struct FabricArgs {
     #[arg(long, value_delimiter = ',')]
     presets: Vec<String>,
     /// The specimens' integrator: symplectic (converges to the resting shape) or implicit
-    /// (Vertex Block Descent: at a few sweeps per step it does not; see README).
+    /// (Vertex Block Descent: at a few sweeps per step it does not; see docs/src/benchmarks/fabric.md).
     #[arg(long, default_value = "symplectic", value_parser = ["symplectic", "implicit"])]
     integrator: String,
     /// Substeps per frame (default: the stability estimate for symplectic, 4 for implicit).
@@ -271,6 +308,25 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
                 },
                 command: std::env::args().collect::<Vec<_>>().join(" "),
             })
+            .map(|_| ())
+        }
+        (Some(BenchCommand::Convergence(c)), _) => {
+            let quick = |normal, quick| if c.quick { quick } else { normal };
+            drapekit::bench::convergence::run_cli(
+                &drapekit::bench::convergence::ConvergenceOptions {
+                    frames: c.frames.or(c.quick.then_some(12)),
+                    refinements: match (c.refinements.is_empty(), c.quick) {
+                        (false, _) => c.refinements.clone(),
+                        (true, true) => vec![1, 2],
+                        (true, false) => vec![1, 2, 4],
+                    },
+                    max_sweeps: c.max_sweeps.unwrap_or(quick(1024, 64)),
+                    max_newton: c.max_newton.unwrap_or(quick(12, 3)),
+                    relax_frames: c.relax_frames,
+                    scene: c.scene,
+                    out: c.out,
+                },
+            )
             .map(|_| ())
         }
         (Some(BenchCommand::Collision(c)), _) => {

@@ -130,6 +130,11 @@ pub struct Vbd {
     pub history: Vec<(u32, f32, f32)>,
     /// Sweeps run, in all; and as many as were last reported.
     pub iterations_run: (u64, u64),
+    /// Newton steps run, in all; and as many as were last reported.
+    pub newton_run: (u64, u64),
+    /// Whether the schedule's last operation, the final force residual, runs: only in the last
+    /// substep of a batch (the frame's), where it is read back.
+    pub measure_final: bool,
     /// With `profile` on: seconds spent in each kind of operation, and how many ran.
     pub profile: Option<std::collections::BTreeMap<&'static str, (u64, f64)>>,
 }
@@ -180,6 +185,8 @@ impl Vbd {
             residual: (0.0, 0.0),
             history: Vec::new(),
             iterations_run: (0, 0),
+            newton_run: (0, 0),
+            measure_final: true,
             profile: None,
         }
     }
@@ -193,15 +200,31 @@ impl Vbd {
         prev: &[Vec4],
         sdfs: &[&[f32]],
     ) {
-        let elements = self.elements.clone();
-        let el = elements.view();
         if let Some(c) = &mut self.newton {
             c.alphas.clear();
         }
         self.history.clear();
-        let mut swept = 0;
-        let schedule = self.schedule.clone();
-        for op in schedule {
+        let mut schedule = self.schedule.clone();
+        if !self.measure_final && schedule.last() == Some(&SolveOp::ForceResidual) {
+            schedule.pop();
+        }
+        self.run_ops(&schedule, params, step, prev, sdfs);
+    }
+
+    /// Runs `ops` in order on the current iterate (a whole schedule, or part of one for
+    /// benchmarks and tests), until they end or a tolerance check finds the solve converged.
+    pub fn run_ops(
+        &mut self,
+        ops: &[SolveOp],
+        params: &SimParams,
+        step: &SubstepParams,
+        prev: &[Vec4],
+        sdfs: &[&[f32]],
+    ) {
+        let elements = self.elements.clone();
+        let el = elements.view();
+        let mut swept = self.history.last().map_or(0, |h| h.0);
+        for &op in ops {
             let started = self.profile.is_some().then(std::time::Instant::now);
             self.run_op(op, params, step, prev, sdfs, &el, &mut swept);
             if let (Some(t), Some(p)) = (started, &mut self.profile) {
@@ -270,6 +293,9 @@ impl Vbd {
                 }
                 SolveOp::CheckConverged => {}
                 _ => {
+                    if op == SolveOp::Assemble {
+                        self.newton_run.0 += 1;
+                    }
                     let newton = self
                         .newton
                         .as_mut()

@@ -133,11 +133,30 @@ pub struct SpatialHash {
 
 impl CpuSolver {
     /// How the CPU evaluates hinges unless the plan says otherwise: once per hinge, measured
-    /// faster here than once per vertex (README, "Benchmarks").
+    /// faster here than once per vertex (docs/src/benchmarks/throughput.md).
     pub const HINGES: HingeEvaluation = HingeEvaluation::Once;
 
     /// A CPU solver for `model` running `plan` (with hinges as `HINGES` if the plan leaves it
     /// open).
+    ///
+    /// ```
+    /// use drapekit::cpu::CpuSolver;
+    /// use drapekit::scene::Scene;
+    /// use drapekit::sim::{prepare, substep_params};
+    /// use drapekit::solver::Solver;
+    /// use std::path::Path;
+    ///
+    /// let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    /// let scene = Scene::load(&dir.join("fixtures/scenes/free_fall.toml"))?;
+    /// let prep = prepare(&scene)?;
+    /// let mut solver = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    /// // One output frame: its substeps in one call, then read the state back.
+    /// solver.advance(&substep_params(&prep, 0))?;
+    /// let state = solver.state()?;
+    /// // Falling from rest: everything moves down.
+    /// assert!(state.velocities.iter().all(|v| v.y < 0.0));
+    /// # Ok::<(), drapekit::Error>(())
+    /// ```
     pub fn new(model: &ClothModel, params: SimParams, plan: &PassPlan) -> Self {
         let plan = &plan.for_backend(Self::HINGES);
         let n = model.len();
@@ -378,6 +397,19 @@ impl CpuSolver {
 }
 
 impl CpuSolver {
+    /// Runs implicit Euler's solve operations `ops` on the current iterate, from the current
+    /// state (after `vbd_init`): part of a substep's schedule, for benchmarks and tests.
+    /// Panics without implicit Euler in the plan.
+    pub fn run_solve_ops(&mut self, ops: &[crate::plan::SolveOp], step: &SubstepParams) {
+        let v = self
+            .vbd
+            .as_mut()
+            .expect("implicit Euler is not in the plan");
+        let sdfs: Vec<&[f32]> = self.colliders.iter().map(|c| &c.sdf.values[..]).collect();
+        let (params, pos) = (&self.params, &self.pos);
+        rayon::scope(|_| v.run_ops(ops, params, step, pos, &sdfs));
+    }
+
     /// Switches self-collision to the point–triangle impulse reference (CPU only).
     pub fn use_point_triangle_reference(&mut self) {
         self.point_triangle_reference = true;
@@ -444,7 +476,11 @@ impl Solver for CpuSolver {
     /// (thousands of small loops a frame in implicit Euler's solve).
     fn advance(&mut self, steps: &[SubstepParams]) -> Result<(), Error> {
         rayon::scope(|_| {
-            for step in steps {
+            for (k, step) in steps.iter().enumerate() {
+                // The final force residual is read at the frame's end only.
+                if let Some(v) = &mut self.vbd {
+                    v.measure_final = k + 1 == steps.len();
+                }
                 for i in 0..self.plan.passes.len() {
                     self.run_pass(self.plan.passes[i], step);
                 }
@@ -467,9 +503,12 @@ impl Solver for CpuSolver {
         Ok(self.vbd.as_mut().map(|v| {
             let (run, reported) = v.iterations_run;
             v.iterations_run.1 = run;
+            let newton = v.newton_run.0 - v.newton_run.1;
+            v.newton_run.1 = v.newton_run.0;
             SolveProgress {
                 relative_residual: relative_residual(&v.steps),
                 iterations: run - reported,
+                newton_steps: newton,
                 force_residual: v.residual,
             }
         }))

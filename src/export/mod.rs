@@ -2,6 +2,7 @@
 //! panel), the body beside them, a PC2 point cache and an animated glTF binary. The last two
 //! need every written frame, so they are kept in memory and written at the end.
 
+pub mod disk;
 pub mod glb;
 pub mod obj;
 pub mod pc2;

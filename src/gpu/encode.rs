@@ -12,7 +12,9 @@ impl GpuSolver {
     pub fn run_passes(&mut self, passes: &[Pass], steps: &[SubstepParams]) -> Result<(), Error> {
         self.ctx.check()?;
         let capacity = self.substeps.as_ref().map_or(usize::MAX, |s| s.capacity);
-        for batch in steps.chunks(capacity.min(steps.len().max(1))) {
+        let batches = steps.chunks(capacity.min(steps.len().max(1)));
+        let last_batch = batches.len().saturating_sub(1);
+        for (b, batch) in batches.enumerate() {
             if let Some(sb) = &self.substeps {
                 let mut bytes = vec![0u8; sb.stride as usize * batch.len()];
                 for (k, step) in batch.iter().enumerate() {
@@ -40,7 +42,9 @@ impl GpuSolver {
                                 .as_ref()
                                 .ok_or_else(|| Error::Gpu("vbd_solve is not in the plan".into()))?;
                             let offset = substep_offset.expect("the solve has substep params");
-                            solve.encode(&mut cpass, self.current, offset);
+                            // The final force residual is read at the call's end only.
+                            let measured = b == last_batch && k + 1 == batch.len();
+                            solve.encode(&mut cpass, self.current, offset, measured);
                             continue;
                         }
                         let stage =

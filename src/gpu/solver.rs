@@ -70,12 +70,38 @@ pub struct GpuSolver {
 
 impl GpuSolver {
     /// How the GPU evaluates hinges unless the plan says otherwise: once per vertex, measured
-    /// faster on lavapipe than once per hinge (README, "Benchmarks"; unmeasured on real GPUs).
+    /// faster on lavapipe than once per hinge (docs/src/benchmarks/throughput.md; unmeasured on real GPUs).
     pub const HINGES: HingeEvaluation = HingeEvaluation::PerVertex;
 
     /// Uploads `model` and builds the pipelines of `plan` (with hinges as `HINGES` if the plan
     /// leaves it open). `max_batch` is the most substeps one `advance` call submits at once
     /// (longer calls are split into batches of that size).
+    ///
+    /// ```
+    /// use drapekit::cpu::CpuSolver;
+    /// use drapekit::gpu::{AdapterChoice, GpuContext, GpuSolver};
+    /// use drapekit::scene::Scene;
+    /// use drapekit::sim::{prepare, substep_params};
+    /// use drapekit::solver::Solver;
+    /// use std::path::Path;
+    ///
+    /// let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    /// let prep = prepare(&Scene::load(&dir.join("fixtures/scenes/hanging_cloth.toml"))?)?;
+    /// // wgpu's software adapter (Mesa's lavapipe), present wherever the tests run.
+    /// let Ok(ctx) = GpuContext::new(&AdapterChoice::Fallback) else {
+    ///     return Ok(()); // no adapter on this machine
+    /// };
+    /// let mut gpu = GpuSolver::new(&ctx, &prep.model, prep.params, &prep.plan, 64)?;
+    /// let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    /// let steps = substep_params(&prep, 0);
+    /// gpu.advance(&steps)?;
+    /// cpu.advance(&steps)?;
+    /// // The GPU pass and its CPU twin agree (bit for bit on lavapipe; within rounding elsewhere).
+    /// let (g, c) = (gpu.state()?, cpu.state()?);
+    /// let apart = g.positions.iter().zip(&c.positions).map(|(a, b)| (*a - *b).length());
+    /// assert!(apart.fold(0.0f32, f32::max) < 1e-4);
+    /// # Ok::<(), drapekit::Error>(())
+    /// ```
     pub fn new(
         ctx: &GpuContext,
         model: &ClothModel,
@@ -560,6 +586,9 @@ impl Solver for GpuSolver {
         Ok(Some(crate::solver::SolveProgress {
             relative_residual: crate::solver::relative_residual(&steps),
             force_residual: (control.residual_max, control.residual_rms),
+            // Not counted on the device yet: a tolerance stop ends a substep's Newton steps
+            // there, and no kernel tallies the ones that ran.
+            newton_steps: 0,
             iterations: sweeps as u64,
         }))
     }

@@ -87,13 +87,24 @@ impl Scene {
         Ok(ids)
     }
 
-    /// The sewn cloth of a `[cloth.pattern]` scene (`None` for grids and meshes).
+    /// The sewn cloth of a `[cloth.pattern]` scene (`None` for grids and meshes), within the
+    /// memory cap (see `build_garment_within`).
     pub fn build_garment(&self) -> Result<Option<Garment>, InputError> {
+        let room = super::budget::check_budget(self)?;
+        self.build_garment_within(room)
+    }
+
+    /// The sewn cloth with at most `max_particles` particles: the mesher stops there.
+    fn build_garment_within(&self, max_particles: usize) -> Result<Option<Garment>, InputError> {
         let ClothSource::Pattern { path, options, .. } = &self.cloth else {
             return Ok(None);
         };
         let pattern = Pattern::load(path)?;
-        Ok(Some(Garment::build(&pattern, options)?))
+        Ok(Some(Garment::build_within(
+            &pattern,
+            options,
+            max_particles,
+        )?))
     }
 
     /// The particles each pin entry selects; an entry that selects nothing is an error.
@@ -159,12 +170,13 @@ impl Scene {
 
     /// Builds the cloth model (mesh, fabric, pins and seams) and, for patterns, the garment.
     pub fn build_model(&self) -> Result<BuiltCloth, InputError> {
-        super::budget::check_budget(self)?;
-        let garment = self.build_garment()?;
+        let room = super::budget::check_budget(self)?;
+        let garment = self.build_garment_within(room)?;
         let mesh = match &garment {
             Some(g) => g.mesh.clone(),
             None => self.build_mesh()?,
         };
+        super::budget::check_mesh_scale(self, &mesh)?;
         let scene_pins = self.pinned_particles(&mesh)?;
         let attached = match &garment {
             Some(g) => self.attached_particles(g)?,

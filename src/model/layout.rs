@@ -146,7 +146,7 @@ pub struct Hinge {
 }
 
 /// A seam pair (WGSL `Seam`): vertex `v[0]` is pulled towards
-/// (1 − weight)·x[v[1]] + weight·x[v[2]].
+/// `(1 − weight)·x[v[1]] + weight·x[v[2]]`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Seam {

@@ -117,6 +117,30 @@ impl ClothModel {
     /// edge with k = Y·ΣA_T/L², summed over the one or two triangles on the edge (Van Gelder
     /// 1998), so the sheet's stiffness does not change with resolution. On a regular grid a
     /// uniform stretch along an axis then stores 1.25× the isotropic membrane's energy.
+    ///
+    /// ```
+    /// use drapekit::mesh::{GridPlane, TriMesh};
+    /// use drapekit::model::ClothModel;
+    /// use drapekit::scene::Fabric;
+    /// use glam::Vec3;
+    ///
+    /// // A 1 m × 1 m sheet of 11 × 11 particles, 0.2 kg/m², held by its first corner.
+    /// let mesh = TriMesh::grid(1.0, 1.0, 11, 11, Vec3::ZERO, GridPlane::Xy);
+    /// let fabric = Fabric {
+    ///     density: 0.2,
+    ///     stretch_stiffness: 500.0,
+    ///     bending_stiffness: Some(1e-5),
+    ///     damping_ratio: 0.05,
+    /// };
+    /// let model = ClothModel::from_mesh(&mesh, &fabric, &[0]);
+    /// assert_eq!(model.len(), 121);
+    /// // Each particle carries a third of its triangles' mass: 0.2 kg in all.
+    /// let mass: f32 = model.masses.iter().sum();
+    /// assert!((mass - 0.2).abs() < 1e-5);
+    /// assert!(model.pinned[0] && !model.pinned[1]);
+    /// // One spring per edge: 2 × 10 × 11 along the rows and columns, plus 100 diagonals.
+    /// assert_eq!(model.springs.len(), 320);
+    /// ```
     pub fn from_mesh(mesh: &TriMesh, fabric: &Fabric, pinned_ids: &[u32]) -> Self {
         let n = mesh.positions.len();
         let masses: Vec<f32> = mesh

@@ -83,6 +83,22 @@ impl Curve {
         })
     }
 
+    /// Corners of a box holding the whole curve: a Bézier curve lies in the hull of its
+    /// control points, an arc within its radius of its centre.
+    pub fn bounds(&self) -> (DVec2, DVec2) {
+        let hull = |pts: &[DVec2]| {
+            (pts.iter()).fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            })
+        };
+        match *self {
+            Curve::Line { start, end } => hull(&[start, end]),
+            Curve::Quadratic { start, c, end } => hull(&[start, c, end]),
+            Curve::Cubic { start, c1, c2, end } => hull(&[start, c1, c2, end]),
+            Curve::Arc { center, radius, .. } => (center - radius.abs(), center + radius.abs()),
+        }
+    }
+
     /// The point at parameter `t` in [0, 1].
     pub fn point(&self, t: f64) -> DVec2 {
         let s = 1.0 - t;

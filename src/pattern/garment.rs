@@ -26,7 +26,7 @@ pub struct GarmentOptions {
     pub placement: HashMap<String, Placement>,
 }
 
-/// A seam vertex and its partner point on the other edge: (1 − w)·x[b[0]] + w·x[b[1]].
+/// A seam vertex and its partner point on the other edge: `(1 − w)·x[b[0]] + w·x[b[1]]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SeamPair {
     /// The seam vertex.
@@ -104,6 +104,16 @@ pub const MAX_OUTLINE_PARTICLES: usize = 4_000_000;
 impl Garment {
     /// Builds the cloth for `pattern`.
     pub fn build(pattern: &Pattern, options: &GarmentOptions) -> Result<Garment, InputError> {
+        Self::build_within(pattern, options, usize::MAX)
+    }
+
+    /// Builds the cloth for `pattern` with at most `max_particles` particles: a panel whose
+    /// mesh would take more is refused as it is meshed, before the memory is spent.
+    pub fn build_within(
+        pattern: &Pattern,
+        options: &GarmentOptions,
+        max_particles: usize,
+    ) -> Result<Garment, InputError> {
         let unit = pattern.units_in_meter;
         let spacing = options.particle_distance * unit; // in pattern units
         let err = |loc: String, problem: String, fix: &str| {
@@ -145,8 +155,12 @@ impl Garment {
                     options.particle_distance,
                     panel.edges[ei].curve.length() / unit
                 ),
-                "check the edge's vertices and curvature control points, and the pattern's \
-                 units_in_meter, or use a coarser particle_distance_m",
+                &format!(
+                    "check the edge's vertices and curvature control points, and the \
+                     pattern's units_in_meter, or use particle_distance_m = {:.4} or more \
+                     (outline particles fall in proportion)",
+                    options.particle_distance * total as f64 / MAX_OUTLINE_PARTICLES as f64
+                ),
             ));
         }
         let mut positions = Vec::new();
@@ -174,11 +188,21 @@ impl Garment {
                     "fix the vertices or curvature so that the outline is a simple loop",
                 ));
             }
-            let mesh = triangulate(&outline, spacing).map_err(|m| {
+            let room = max_particles.saturating_sub(positions.len() + outline.len());
+            let mesh = triangulate(&outline, spacing, room).map_err(|m| {
+                let finest = (0..panel.edges.len())
+                    .map(|e| panel.edges[e].curve.length() / unit / segments[pi][e] as f64)
+                    .fold(f64::INFINITY, f64::min);
                 err(
                     format!("panel '{}'", panel.name),
-                    format!("cannot be triangulated: {m}"),
-                    "check the outline",
+                    format!(
+                        "cannot be triangulated: {m} (its outline's finest segments are \
+                         {finest:.2e} m at particle_distance_m = {}: an edge sewn to a much \
+                         longer one takes that edge's particle count)",
+                        options.particle_distance as f32
+                    ),
+                    "check the outline and the lengths of the stitched edges, use a coarser \
+                     particle_distance_m, or raise solver.max_memory_mb",
                 )
             })?;
             let base = positions.len() as u32;

@@ -1,8 +1,10 @@
 //! Sewing patterns in the GarmentCode JSON specification: panels (2D outlines made of straight,
 //! Bézier and arc edges, placed in 3D) and stitches (pairs of edges sewn together).
-//! See README.md ("Patterns") for the fields drapekit reads.
+//! See docs/src/patterns.md for the fields drapekit reads.
 
 pub mod curve;
+pub mod duplicates;
+mod format;
 pub mod garment;
 pub mod mesher;
 pub mod transfer;
@@ -183,7 +185,7 @@ impl Reader<'_> {
 impl Pattern {
     /// Reads and validates a GarmentCode JSON pattern.
     pub fn load(path: &Path) -> Result<Pattern, InputError> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
+        let bytes = std::fs::read(path).map_err(|e| {
             InputError::new(
                 path,
                 "",
@@ -191,13 +193,57 @@ impl Pattern {
                 "check the path in the scene's [cloth.pattern] table",
             )
         })?;
+        if let Some(format) = format::foreign_format(path, &bytes) {
+            let (problem, fix) = format::foreign_format_message(format);
+            return Err(InputError::new(path, "", problem, fix));
+        }
+        let text = String::from_utf8(bytes).map_err(|_| {
+            InputError::new(
+                path,
+                "",
+                "the file is not text (GarmentCode patterns are UTF-8 JSON)",
+                "check the path in the scene's [cloth.pattern] table",
+            )
+        })?;
         Self::parse(&text, path)
     }
 
     /// Parses and validates pattern JSON; `path` only labels errors.
+    ///
+    /// ```
+    /// use drapekit::pattern::garment::{Garment, GarmentOptions};
+    /// use drapekit::pattern::Pattern;
+    /// use std::path::Path;
+    ///
+    /// // Two 40 cm squares (GarmentCode units: cm), 2 cm apart, sewn along their facing sides.
+    /// let json = r#"{"pattern": {
+    ///     "panels": {
+    ///         "left":  {"translation": [-42, 0, 0], "rotation": [0, 0, 0],
+    ///                   "vertices": [[0, 0], [40, 0], [40, 40], [0, 40]],
+    ///                   "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]},
+    ///                             {"endpoints": [2, 3]}, {"endpoints": [3, 0]}]},
+    ///         "right": {"translation": [0, 0, 0], "rotation": [0, 0, 0],
+    ///                   "vertices": [[0, 0], [40, 0], [40, 40], [0, 40]],
+    ///                   "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]},
+    ///                             {"endpoints": [2, 3]}, {"endpoints": [3, 0]}]}},
+    ///     "stitches": [[{"panel": "left", "edge": 1}, {"panel": "right", "edge": 3}]]}}"#;
+    /// let pattern = Pattern::parse(json, Path::new("squares.json"))?;
+    /// assert_eq!(pattern.panels.len(), 2);
+    /// let options = GarmentOptions { particle_distance: 0.05, placement: Default::default() };
+    /// let garment = Garment::build(&pattern, &options)?;
+    /// assert_eq!(garment.stitches, 1);
+    /// // Both 40 cm edges get 8 segments at 5 cm; their 9 vertices pair up one to one.
+    /// assert_eq!(garment.seam_pairs.len(), 9);
+    /// # Ok::<(), drapekit::InputError>(())
+    /// ```
     pub fn parse(text: &str, path: &Path) -> Result<Pattern, InputError> {
         let r = Reader { path };
-        let root: Value = serde_json::from_str(&non_finite_tokens_to_null(text)).map_err(|e| {
+        let text = &non_finite_tokens_to_null(text);
+        let root: Value = serde_json::from_str(text).map_err(|e| {
+            if let Some(format) = format::foreign_format(path, text.as_bytes()) {
+                let (problem, fix) = format::foreign_format_message(format);
+                return InputError::new(path, "", problem, fix);
+            }
             InputError::new(
                 path,
                 "",
@@ -206,6 +252,26 @@ impl Pattern {
             )
             .at_line(Some(e.line()))
         })?;
+        // serde_json keeps the last of two equal keys: two panels of one name would lose one.
+        if let Some(d) = duplicates::first_duplicate(text) {
+            let problem = match d.parent.as_deref() {
+                Some("panels") => format!("two panels are named '{}'", d.key),
+                Some(parent) => format!("the key \"{}\" appears twice in \"{parent}\"", d.key),
+                None => format!("the key \"{}\" appears twice", d.key),
+            };
+            let location = match d.parent.as_deref() {
+                Some("panels") => format!("panel '{}'", d.key),
+                _ => String::new(),
+            };
+            return Err(InputError::new(
+                path,
+                location,
+                problem,
+                "give every panel (and every key of an object) its own name: the second would \
+                 silently replace the first",
+            )
+            .at_line(Some(d.line)));
+        }
         let props = root.get("properties");
         let units_in_meter = match props.and_then(|p| p.get("units_in_meter")) {
             None => 100.0,

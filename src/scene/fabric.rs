@@ -36,7 +36,10 @@ pub(super) fn parse(c: &Checker, f: &RawFabric) -> Result<Fabric, InputError> {
             c.err(
                 "fabric",
                 "preset",
-                format!("unknown fabric preset {name:?}"),
+                format!(
+                    "unknown fabric preset {name:?}{}",
+                    crate::suggest::did_you_mean(name, names.iter().copied())
+                ),
                 format!("use one of {names:?}, or give density_kg_m2 and stretch_stiffness_n_m"),
             )
         })?),

@@ -1,7 +1,12 @@
 //! Named fabric presets for `[fabric] preset = "..."`: areal density, stretch and bending
 //! stiffness, and damping for seven garment fabrics, from published measurements where they
-//! exist. README.md ("Fabric presets") lists the sources and says which values are proxies. A
-//! key written next to `preset` in `[fabric]` overrides that preset's value.
+//! exist. The book's "Fabrics" chapter (docs/src/fabrics.md) lists the sources and says which
+//! values are proxies. A key written next to `preset` in `[fabric]` overrides that preset's value.
+//!
+//! The revisions of the repositories read for the sources: wxhaooo/lyra 5158f74 (the W11
+//! material files), zhou13/arcsim 16f970e (the W11 units and hinge energy),
+//! DrapeTester/ClothDrapeTester 24a980c (Feng et al. 2022's dataset), st-tech/ppf-contact-solver
+//! f23b356 (the secondhand stretch quotes).
 //!
 //! Conventions, shared by every row:
 //! - Stretch is the small-strain (zero-strain sample) uniaxial stiffness with the lateral edges
@@ -19,7 +24,7 @@
 //! Tags in the comments: [M] measured, [D] derived from [M], [2] secondhand, [P] proxy (real
 //! data, not this fabric), [low] engine or vendor page.
 
-/// A named fabric with values from published measurements (see README.md, "Fabric presets").
+/// A named fabric with values from published measurements (see docs/src/fabrics.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FabricPreset {
     /// The name used in `[fabric] preset`.
@@ -36,7 +41,7 @@ pub struct FabricPreset {
     pub source: &'static str,
 }
 
-/// Every preset, in the order the README lists them.
+/// Every preset, in the order the book lists them.
 pub const PRESETS: &[FabricPreset] = &[
     FabricPreset {
         name: "cotton",

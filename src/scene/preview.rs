@@ -121,7 +121,10 @@ pub(super) fn camera(
                 Err(c.err(
                     table,
                     "camera",
-                    format!("unknown camera {name:?}"),
+                    format!(
+                        "unknown camera {name:?}{}",
+                        crate::suggest::did_you_mean(name, CAMERA_PRESETS.iter().copied())
+                    ),
                     "use front, back, side, three-quarter, or { eye = [x, y, z], target = [x, y, z], fov_deg = 30 }",
                 ))
             }
@@ -212,7 +215,10 @@ pub(super) fn parse(
                 c.err(
                     "output",
                     "preview_camera",
-                    format!("unknown camera {name:?}"),
+                    format!(
+                        "unknown camera {name:?}{}",
+                        crate::suggest::did_you_mean(name, CAMERA_PRESETS.iter().copied())
+                    ),
                     "use front, back, side or three-quarter",
                 )
             })?

@@ -200,6 +200,7 @@ pub(super) struct RawSolver {
     pub(super) multigrid: Option<bool>,
     pub(super) smoothing_sweeps: Option<i64>,
     pub(super) settle_speed_m_s: Option<f64>,
+    pub(super) settle_force_residual: Option<f64>,
     /// Replaced by `settle_speed_m_s`; read only to say so.
     pub(super) settle_ke_per_particle_j: Option<f64>,
     #[serde(default = "default_max_substeps")]
@@ -217,7 +218,7 @@ pub(super) struct RawSolver {
 }
 
 /// Between two frames with no work done on the cloth, its energy may rise by half its kinetic
-/// plus elastic energy before the run counts as diverging (README, "Stability and limits").
+/// plus elastic energy before the run counts as diverging (docs/src/stability.md).
 fn default_max_energy_growth() -> f64 {
     0.5
 }
@@ -239,7 +240,7 @@ pub(super) enum RawStrainLimit {
 }
 
 /// Jacobi sweeps of the strain limit per substep: enough to fix an isolated over-stretched edge
-/// and its neighbours; a long chain takes several substeps (README, "Strain limiting").
+/// and its neighbours; a long chain takes several substeps (docs/src/stability.md, "Strain limiting").
 fn default_strain_limit_iterations() -> i64 {
     4
 }
@@ -247,7 +248,7 @@ fn default_strain_limit_iterations() -> i64 {
 fn default_fps() -> f64 {
     24.0
 }
-/// Sweeps per implicit substep; README.md ("Implicit Euler") shows the residual it leaves.
+/// Sweeps per implicit substep; docs/src/implicit.md shows the residual it leaves.
 fn default_iterations() -> i64 {
     DEFAULT_ITERATIONS
 }

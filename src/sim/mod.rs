@@ -55,6 +55,8 @@ pub struct Prepared {
     pub max_strain: f32,
     /// The settle rule: the free particles' RMS speed below which the cloth is at rest, m/s.
     pub settle_speed: Option<f32>,
+    /// With implicit Euler, the settle rule's force residual (RMS |f|/(m·g)) too.
+    pub settle_force_residual: Option<f32>,
     /// The free (never pinned) particles' mass, in kg, for the RMS speed.
     pub free_mass: f64,
     /// Things the user should know (e.g. a substep above the stable estimate).
@@ -339,6 +341,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         frames: s.frames,
         wind,
         settle_speed: s.settle_speed,
+        settle_force_residual: implicit.then_some(s.settle_force_residual),
         free_mass,
         max_strain: s.max_strain,
         warnings,
@@ -429,6 +432,13 @@ pub struct RunStats {
     /// Iterations the implicit solve ran, over every substep.
     #[serde(default)]
     pub iterations_run: u64,
+    /// Newton steps the implicit solve ran, over every substep.
+    #[serde(default)]
+    pub newton_steps_run: u64,
+    /// With the strain-limiting stage on: the edges at its cap (stretched to within 0.1% of it
+    /// or past it) at the last frame, which the cap, not the solve, holds.
+    #[serde(default)]
+    pub strain_limit_clamped_edges: Option<usize>,
     /// The implicit solve's force residual |f|/(m·g) at the end of the last frame's last
     /// substep: largest and RMS over the free particles.
     #[serde(default)]
@@ -474,6 +484,27 @@ fn release(
 /// Runs `prep.frames` output frames on `solver`, calling `on_frame` with each finite frame
 /// (frame 0 is the initial state). A non-finite frame stops the run with an error naming the
 /// frame and the first bad particle; `on_frame` never sees it.
+///
+/// ```
+/// use drapekit::cpu::CpuSolver;
+/// use drapekit::scene::Scene;
+/// use drapekit::sim::{prepare, simulate, RunStats};
+/// use std::path::Path;
+///
+/// let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+/// let mut scene = Scene::load(&dir.join("fixtures/scenes/hanging_cloth.toml"))?;
+/// scene.solver.frames = 3;
+/// let prep = prepare(&scene)?;
+/// let mut solver = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+/// let mut lowest = Vec::new();
+/// simulate(&prep, &mut solver, &mut RunStats::default(), |frame, state| {
+///     lowest.push((frame, state.positions.iter().map(|p| p.y).fold(f32::MAX, f32::min)));
+///     Ok(())
+/// })?;
+/// assert_eq!(lowest.len(), 4); // frame 0 (the start) and frames 1 to 3
+/// assert!(lowest[3].1 < lowest[0].1); // the cloth sags
+/// # Ok::<(), drapekit::Error>(())
+/// ```
 pub fn simulate(
     prep: &Prepared,
     solver: &mut dyn Solver,
@@ -614,12 +645,19 @@ pub fn simulate_from(
             let r = p.relative_residual;
             stats.max_residual = Some(stats.max_residual.map_or(r, |m| m.max(r)));
             stats.iterations_run += p.iterations;
+            stats.newton_steps_run += p.newton_steps;
             stats.force_residual = Some(p.force_residual);
         }
         stats.max_speed = stats.max_speed.max(health.max_speed);
         stats.frames_run = frame;
         stats.max_edge_strain = stats.max_edge_strain.max(strain);
         stats.last_edge_strain = strain;
+        if prep.plan.contains(crate::plan::Pass::StrainLimit) {
+            let cap = 0.999 * prep.params.strain_limit;
+            let springs = &prep.model.springs;
+            let held = metrics::edges_stretched_past(&state.positions, springs, cap);
+            stats.strain_limit_clamped_edges = Some(held);
+        }
         stats.kinetic_energy_j = health.kinetic_energy;
         stats.seam_gaps = seam_gaps(&state);
         let mut touching = vec![false; state.positions.len()];

@@ -14,6 +14,9 @@ pub struct Settled {
     pub rule: String,
     /// The free particles' RMS speed then, in m/s.
     pub rms_speed_m_s: f64,
+    /// With implicit Euler, the RMS force residual |f|/(m·g) then.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force_residual_rms: Option<f32>,
 }
 
 /// The free particles' mass-weighted RMS displacement over the frame, per second:
@@ -31,16 +34,29 @@ pub(super) fn frame_speed(prep: &Prepared, before: &[Vec4], after: &[Vec4]) -> f
 }
 
 /// Whether frame `frame` settles the run: the scene has the rule, gravity is on, attachments
-/// are released (a cloth at rest while still being sewn or held has not settled), and the
-/// frame's speed is under the threshold. A run continued from a coarse start has no speed
-/// until the full mesh has run a frame.
+/// are released (a cloth at rest while still being sewn or held has not settled), the frame's
+/// speed is under the threshold and, with implicit Euler, so is its solve's force residual: a
+/// cloth that stopped moving because the solve stopped carrying load to where it belongs has
+/// not settled. A run continued from a coarse start has no speed until the full mesh has run a
+/// frame.
 pub(super) fn check(prep: &Prepared, stats: &RunStats, frame: u32) -> Option<Settled> {
     let loaded = frame > prep.gravity.1 && frame > prep.attach_frames;
     let threshold = prep.settle_speed? as f64;
     let rms_speed = stats.frame_speed_m_s?;
-    (loaded && rms_speed < threshold).then(|| Settled {
+    let balanced = match (prep.settle_force_residual, stats.force_residual) {
+        (Some(limit), Some((_, rms))) => rms <= limit,
+        (Some(_), None) => false,
+        (None, _) => true,
+    };
+    (loaded && rms_speed < threshold && balanced).then(|| Settled {
         frame,
-        rule: "rms_speed".into(),
+        rule: match prep.settle_force_residual {
+            Some(_) => "rms_speed and force_residual".into(),
+            None => "rms_speed".into(),
+        },
         rms_speed_m_s: rms_speed,
+        force_residual_rms: prep
+            .settle_force_residual
+            .and(stats.force_residual.map(|r| r.1)),
     })
 }

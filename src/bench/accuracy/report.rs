@@ -25,7 +25,7 @@ pub struct Environment {
     pub scene: Scene,
 }
 
-/// The CSV's columns, in order (documented in README.md, "Accuracy against cost").
+/// The CSV's columns, in order (documented in docs/src/benchmarks/accuracy.md).
 pub const CSV_COLUMNS: [&str; 30] = [
     "label",
     "knob",

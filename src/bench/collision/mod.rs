@@ -91,7 +91,7 @@ impl Contender {
     }
 }
 
-/// The CSV's columns, in order (documented in README.md, "Collision strategies").
+/// The CSV's columns, in order (documented in docs/src/benchmarks/collision.md).
 pub const CSV_COLUMNS: [&str; 24] = [
     "scale",
     "particles",

@@ -76,7 +76,7 @@ impl Effect {
     }
 }
 
-/// The CSV's columns, in order (documented in README.md, "What each effect costs").
+/// The CSV's columns, in order (documented in docs/src/benchmarks/effects.md).
 pub const CSV_COLUMNS: [&str; 22] = [
     "effect",
     "in_scene",

@@ -50,7 +50,7 @@ pub struct Band {
     pub low: f64,
     /// Highest published DC, %.
     pub high: f64,
-    /// Where it comes from (README, "Fabric against the real world").
+    /// Where it comes from (docs/src/benchmarks/fabric.md).
     pub source: &'static str,
 }
 

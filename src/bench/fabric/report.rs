@@ -4,7 +4,7 @@ use super::{FabricOptions, FabricRow, GRAVITY};
 use crate::bench::cpu_threads_description;
 use std::fmt::Write as _;
 
-/// The columns of `fabric.csv`, documented in README.md ("Fabric against the real world").
+/// The columns of `fabric.csv`, documented in docs/src/benchmarks/fabric.md.
 pub const CSV_COLUMNS: &[&str] = &[
     "preset",
     "test",

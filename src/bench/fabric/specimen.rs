@@ -120,7 +120,7 @@ fn scene_toml(preset: &str, stretch: Option<f64>, spacing: f64, step: &Stepping)
          air_damping_per_s = 10.0\n\n\
          [solver]\nfps = 24\nframes = {}\nsubsteps = {substeps}\nintegrator = \"{}\"\n",
         stretch.map_or(String::new(), |k| format!(
-            "# Softer than the preset: see README, \"Fabric against the real world\".\n\
+            "# Softer than the preset: see docs/src/benchmarks/fabric.md.\n\
              stretch_stiffness_n_m = {k}\n"
         )),
         step.max_frames,

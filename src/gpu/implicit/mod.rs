@@ -61,6 +61,8 @@ pub struct ImplicitSolve {
     /// The substep's operations and their dispatches.
     schedule: Vec<SolveOp>,
     dispatches: Vec<Dispatch>,
+    /// How many of `dispatches`, at the end, measure the final force residual.
+    final_residual: usize,
     tables: Tables,
     /// Entries the `OpParams` and op-list buffers hold.
     capacity: (usize, usize),
@@ -114,6 +116,11 @@ impl ImplicitSolve {
         for op in &schedule {
             builder.expand(std::slice::from_ref(op));
         }
+        // The final force residual's dispatches, which only a batch's last substep runs.
+        let final_residual = match schedule.last() {
+            Some(&SolveOp::ForceResidual) => builder.expand(&[SolveOp::ForceResidual]).len(),
+            _ => 0,
+        };
         let kernels: Vec<SolveKernel> = (SolveKernel::ALL.into_iter())
             .filter(|k| dispatches.iter().any(|d| d.kernel == *k))
             .collect();
@@ -158,6 +165,7 @@ impl ImplicitSolve {
             pipelines,
             schedule,
             dispatches,
+            final_residual,
             tables,
             capacity: sizes.capacity,
             op_stride: sizes.op_stride,
@@ -197,9 +205,20 @@ impl ImplicitSolve {
     }
 
     /// Encodes the substep's whole solve: xₙ in `pos[parity]`, the substep's uniform at
-    /// `substep_offset`.
-    pub(super) fn encode(&self, cpass: &mut wgpu::ComputePass, parity: usize, substep_offset: u32) {
-        self.encode_dispatches(cpass, &self.dispatches, parity, substep_offset);
+    /// `substep_offset`. The final force residual runs only where it is `measured` (a batch's
+    /// last substep, whose residual is read back), as on the CPU.
+    pub(super) fn encode(
+        &self,
+        cpass: &mut wgpu::ComputePass,
+        parity: usize,
+        substep_offset: u32,
+        measured: bool,
+    ) {
+        let end = match measured {
+            true => self.dispatches.len(),
+            false => self.dispatches.len() - self.final_residual,
+        };
+        self.encode_dispatches(cpass, &self.dispatches[..end], parity, substep_offset);
     }
 
     fn encode_dispatches(

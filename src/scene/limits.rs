@@ -1,0 +1,312 @@
+//! Derived quantities, computed in f64 from a parsed scene and range-checked before anything
+//! is built in f32: the cloth's extent and edge length, each particle's mass, the springs'
+//! stiffness and damping, the fastest oscillation (the stable step), the frame and substep,
+//! gravity, and the wind's drag. A value outside its range is bad input naming the key to
+//! change; `warnings` lists values that compute but make no physical sense.
+
+use super::{ClothSource, Scene, INTEGRATOR_IMPLICIT};
+use crate::check::Checker;
+use crate::error::InputError;
+
+/// The magnitudes (in SI units) a derived quantity may take. The solver multiplies up to three
+/// of them (½·m·v², k·Δx·h) and its monitor sums 64 such products in f32: 64·(10¹²)³ =
+/// 6.4·10³⁷ stays below f32's largest value, 3.4·10³⁸, and (10⁻¹²)³ = 10⁻³⁶ above its smallest
+/// normal value, 1.2·10⁻³⁸.
+pub const SAFE_MAGNITUDE: (f64, f64) = (1e-12, 1e12);
+
+/// The shortest edge, as a fraction of the largest coordinate, whose strain f32 positions
+/// resolve to 1%: a coordinate is rounded to 2⁻²⁴ of its size, so an edge of length L at
+/// coordinate X carries a strain error of about 1.2·10⁻⁷·X/L.
+pub const MIN_EDGE_PER_COORDINATE: f64 = 1.2e-5;
+
+/// Springs meeting at a particle, at most, for the stable-step estimate (a grid's interior
+/// particle has 4 axis and 2 or 4 diagonal springs; a pattern mesh about 6).
+const SPRINGS_PER_PARTICLE: f64 = 8.0;
+
+/// What `check` needs to know of the cloth: the extent of its coordinates, its shortest edge,
+/// its lightest particle, and its stiffest spring.
+struct ClothScale {
+    /// The key the numbers come from, to name in errors.
+    table: &'static str,
+    key: &'static str,
+    /// Largest |coordinate| in m (`None`: not known before the file is read).
+    coordinate: Option<f64>,
+    /// Shortest edge in m.
+    edge: f64,
+    /// Lightest particle in kg.
+    mass: f64,
+    /// Stiffest spring in N/m.
+    stiffness: f64,
+}
+
+/// The cloth's scale, from the scene alone (`None` for an OBJ mesh, checked once built).
+fn cloth_scale(scene: &Scene) -> Option<ClothScale> {
+    let density = scene.fabric.density as f64;
+    let stretch = scene.fabric.stretch_stiffness as f64;
+    match &scene.cloth {
+        ClothSource::Grid {
+            width,
+            height,
+            columns,
+            rows,
+            center,
+            ..
+        } => {
+            let (w, h) = (*width as f64, *height as f64);
+            let (dx, dy) = (w / (*columns as f64 - 1.0), h / (*rows as f64 - 1.0));
+            let offset = center.abs().max_element() as f64;
+            let reach = 0.5 * w.max(h) + offset;
+            // The key most likely at fault: the centre if it dominates, else the longer side.
+            let key = match (offset > w.max(h), w >= h) {
+                (true, _) => "center_m",
+                (false, true) => "width_m",
+                (false, false) => "height_m",
+            };
+            Some(ClothScale {
+                table: "cloth.grid",
+                key,
+                coordinate: Some(reach),
+                edge: dx.min(dy),
+                // A corner particle holds a quarter of a cell.
+                mass: 0.25 * density * dx * dy,
+                // k = Y·ΣA/L² on an axis edge of a cell dx × dy: Y·dy/dx (or dx/dy).
+                stiffness: stretch * (dx / dy).max(dy / dx),
+            })
+        }
+        ClothSource::Pattern {
+            options,
+            seam_stiffness,
+            ..
+        } => {
+            let s = options.particle_distance;
+            Some(ClothScale {
+                table: "cloth.pattern",
+                key: "particle_distance_m",
+                coordinate: None,
+                edge: s,
+                // An outline corner may hold a sixth of an equilateral particle's √3/2·s².
+                mass: density * 3f64.sqrt() / 12.0 * s * s,
+                stiffness: stretch.max(*seam_stiffness as f64),
+            })
+        }
+        ClothSource::Mesh { .. } => None,
+    }
+}
+
+/// An error unless `v` lies in `SAFE_MAGNITUDE`; `what` says what it is and how it is made.
+fn safe(
+    c: &Checker,
+    (table, key): (&str, &str),
+    what: &str,
+    v: f64,
+    unit: &str,
+    fix: &str,
+) -> Result<(), InputError> {
+    let (lo, hi) = SAFE_MAGNITUDE;
+    if v.is_finite() && (lo..=hi).contains(&v.abs()) {
+        return Ok(());
+    }
+    Err(c.err(
+        table,
+        key,
+        format!(
+            "{what} would be {v:.3e} {unit}, outside {lo:e} to {hi:e} {unit}, the range the \
+             solver's 32-bit arithmetic holds"
+        ),
+        fix,
+    ))
+}
+
+/// Refuses a scene whose derived quantities the solver cannot represent or integrate.
+pub(super) fn check(c: &Checker, scene: &Scene) -> Result<(), InputError> {
+    let fabric_fix = "check the fabric's density_kg_m2 and stretch_stiffness_n_m and the \
+                      cloth's size and particle count (SI units: kg/m², N/m, m)";
+    if let Some(cloth) = cloth_scale(scene) {
+        let at = (cloth.table, cloth.key);
+        let size_fix = format!(
+            "check {}.{} and the cloth's size and particle count (in m)",
+            cloth.table, cloth.key
+        );
+        safe(c, at, "the shortest edge", cloth.edge, "m", &size_fix)?;
+        if let Some(reach) = cloth.coordinate {
+            safe(c, at, "the largest coordinate", reach, "m", &size_fix)?;
+            if cloth.edge < MIN_EDGE_PER_COORDINATE * reach {
+                return Err(c.err(
+                    cloth.table,
+                    cloth.key,
+                    format!(
+                        "edges of {:.3e} m at coordinates up to {reach:.3e} m: 32-bit positions \
+                         there are too coarse to resolve a 1% strain of such an edge",
+                        cloth.edge
+                    ),
+                    format!(
+                        "edges must be at least {MIN_EDGE_PER_COORDINATE:e} of the largest \
+                         coordinate: move the cloth nearer the origin or use fewer particles"
+                    ),
+                ));
+            }
+        }
+        // A density far from any fabric's (0.02 to 1 kg/m²) is the likelier slip.
+        let density = scene.fabric.density as f64;
+        let mass_at = if (1e-3..=10.0).contains(&density) {
+            at
+        } else {
+            ("fabric", "density_kg_m2")
+        };
+        safe(
+            c,
+            mass_at,
+            "the lightest particle's mass",
+            cloth.mass,
+            "kg",
+            fabric_fix,
+        )?;
+        let stretch = ("fabric", "stretch_stiffness_n_m");
+        safe(
+            c,
+            stretch,
+            "the stiffest spring",
+            cloth.stiffness,
+            "N/m",
+            fabric_fix,
+        )?;
+        // ω² ≤ 2·Σk/m (Gershgorin); its inverse is the scale of the stable step.
+        let omega = (2.0 * SPRINGS_PER_PARTICLE * cloth.stiffness / cloth.mass).sqrt();
+        safe(
+            c,
+            stretch,
+            "the fastest oscillation",
+            omega,
+            "rad/s",
+            fabric_fix,
+        )?;
+        let zeta = scene.fabric.damping_ratio as f64;
+        if zeta > 0.0 {
+            let damping = 2.0 * zeta * (cloth.stiffness * cloth.mass).sqrt();
+            let fix = "use a damping_ratio from 0 to about 1 (a fraction of critical damping)";
+            safe(
+                c,
+                ("fabric", "damping_ratio"),
+                "the springs' damping",
+                damping,
+                "N·s/m",
+                fix,
+            )?;
+            safe(
+                c,
+                ("fabric", "damping_ratio"),
+                "the damping rate",
+                damping / cloth.mass,
+                "1/s",
+                fix,
+            )?;
+        }
+    }
+    let s = &scene.solver;
+    let frame = 1.0 / s.fps as f64;
+    safe(
+        c,
+        ("solver", "fps"),
+        "the frame length",
+        frame,
+        "s",
+        "use a frame rate such as 24 or 30",
+    )?;
+    if let Some(n) = s.substeps {
+        let fix = "use fewer substeps per frame";
+        safe(
+            c,
+            ("solver", "substeps"),
+            "the substep",
+            frame / n as f64,
+            "s",
+            fix,
+        )?;
+    }
+    let g = scene.gravity.as_dvec3().length();
+    if g != 0.0 {
+        let fix = "give gravity in m/s² (Earth: [0, -9.81, 0])";
+        safe(c, ("world", "gravity_m_s2"), "gravity", g, "m/s²", fix)?;
+    }
+    check_wind(c, scene, frame)
+}
+
+/// Wind drag relaxes the cloth's speed toward the wind's at the rate γ = ρ·C_d·|v|/σ (the
+/// drag force's derivative in speed over the mass per area σ); the explicit drag update is
+/// stable only for γ·h < 2, so a drag that no allowed substep can follow is bad input.
+fn check_wind(c: &Checker, scene: &Scene, frame: f64) -> Result<(), InputError> {
+    let Some(w) = &scene.wind else {
+        return Ok(());
+    };
+    let speed = w.velocity.as_dvec3().length() * (1.0 + w.gust_amplitude as f64);
+    if speed != 0.0 {
+        let fix = "give the wind in m/s (a gale is about 20 m/s)";
+        safe(
+            c,
+            ("wind", "velocity_m_s"),
+            "the wind speed",
+            speed,
+            "m/s",
+            fix,
+        )?;
+    }
+    let rate =
+        w.air_density as f64 * w.drag_coefficient as f64 * speed / scene.fabric.density as f64;
+    let s = &scene.solver;
+    // The shortest substep the scene allows: its own, or the most `auto` may choose.
+    let (step, steps_key) = match s.substeps {
+        Some(n) => (frame / n as f64, "substeps"),
+        None if s.integrator == INTEGRATOR_IMPLICIT => (frame, "substeps"),
+        None => (
+            frame / s.max_substeps_per_frame as f64,
+            "max_substeps_per_frame",
+        ),
+    };
+    if rate * step < 2.0 {
+        return Ok(());
+    }
+    let needed = (rate * frame / 2.0).ceil();
+    Err(c.err(
+        "wind",
+        "drag_coefficient",
+        format!(
+            "the wind's drag (air density × drag coefficient × wind speed / fabric density = \
+             {rate:.3e} per s) changes the cloth's speed faster than a substep of {step:.3e} s \
+             can follow (it needs rate × substep < 2)"
+        ),
+        format!(
+            "use a drag coefficient near 1 (cloth and flat plates: 1 to 2), or at least \
+             {needed:.0} substeps per frame (solver.{steps_key})"
+        ),
+    ))
+}
+
+/// Values that the solver can compute with but that no real scene has.
+pub fn warnings(scene: &Scene) -> Vec<String> {
+    let mut out = Vec::new();
+    if let Some(w) = &scene.wind {
+        if w.drag_coefficient > 3.0 {
+            out.push(format!(
+                "wind.drag_coefficient = {} is above any cloth's or flat plate's (1 to 2)",
+                w.drag_coefficient
+            ));
+        }
+    }
+    if scene.fabric.damping_ratio > 10.0 {
+        out.push(format!(
+            "fabric.damping_ratio = {} is ten times critical damping: the cloth will creep, \
+             not swing",
+            scene.fabric.damping_ratio
+        ));
+    }
+    for (i, b) in scene.bodies.iter().enumerate() {
+        if b.friction > 2.0 {
+            out.push(format!(
+                "{}.friction = {} is above any fabric's on skin or plastic (about 0.2 to 1)",
+                scene.body_table(i),
+                b.friction
+            ));
+        }
+    }
+    out
+}
