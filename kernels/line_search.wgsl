@@ -25,4 +25,6 @@ fn main() {
         }
     }
     scalars.line_alpha = alpha;
+    // Every Newton step that runs ends in one line search (the CPU twin counts its assemblies).
+    scalars.newton_steps = scalars.newton_steps + 1u;
 }

@@ -30,6 +30,8 @@ struct SolveScalars {
     rz: vec2<f32>,               // r·z of the current direction, at the iteration's parity (the other: the previous)
     alpha: f32,                  // the last conjugate-gradient step length
     line_alpha: f32,             // the last line search's step length
+    newton_steps: u32,           // line searches run, one per Newton step (it wraps)
+    _pad0: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: SimParams;

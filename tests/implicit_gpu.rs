@@ -132,6 +132,8 @@ fn solve_structs_match_their_rust_mirrors() {
             ("rz", offset_of!(SolveScalars, rz)),
             ("alpha", offset_of!(SolveScalars, alpha)),
             ("line_alpha", offset_of!(SolveScalars, line_alpha)),
+            ("newton_steps", offset_of!(SolveScalars, newton_steps)),
+            ("_pad0", offset_of!(SolveScalars, _pad0)),
         ],
     );
 }

@@ -578,17 +578,18 @@ impl Solver for GpuSolver {
         };
         let words = self.read_u32(&solve.buffers.steps)?;
         let control = self.solve_control()?;
+        let newton_run = self.solve_scalars()?.newton_steps;
         let (steps, count) = words.split_at(words.len() - 1);
         let steps: Vec<f32> = steps.iter().map(|&w| f32::from_bits(w)).collect();
         let solve = self.implicit.as_mut().expect("checked above");
         let sweeps = count[0].wrapping_sub(solve.sweeps_reported);
         solve.sweeps_reported = count[0];
+        let newton_steps = newton_run.wrapping_sub(solve.newton_reported);
+        solve.newton_reported = newton_run;
         Ok(Some(crate::solver::SolveProgress {
             relative_residual: crate::solver::relative_residual(&steps),
             force_residual: (control.residual_max, control.residual_rms),
-            // Not counted on the device yet: a tolerance stop ends a substep's Newton steps
-            // there, and no kernel tallies the ones that ran.
-            newton_steps: 0,
+            newton_steps: newton_steps as u64,
             iterations: sweeps as u64,
         }))
     }

@@ -119,7 +119,8 @@ impl GpuSolver {
     /// The conjugate-gradient and line-search scalars.
     pub fn solve_scalars(&self) -> Result<SolveScalars, Error> {
         let words = self.read_u32(&self.solve()?.buffers.scalars)?;
-        Ok(*bytemuck::from_bytes(bytemuck::cast_slice(&words[..4])))
+        let len = std::mem::size_of::<SolveScalars>() / 4;
+        Ok(*bytemuck::from_bytes(bytemuck::cast_slice(&words[..len])))
     }
 
     /// Overwrites the conjugate-gradient and line-search scalars.

@@ -51,6 +51,10 @@ pub struct SolveScalars {
     pub alpha: f32,
     /// The last line search's step length.
     pub line_alpha: f32,
+    /// Line searches run, one per Newton step (it wraps at 2³²).
+    pub newton_steps: u32,
+    /// Padding.
+    pub _pad0: u32,
 }
 
 /// A 3×3 block as a WGSL `mat3x3<f32>` in a storage buffer: three columns, each padded to 16

@@ -74,6 +74,8 @@ pub struct ImplicitSolve {
     n: u32,
     /// The count of sweeps run when last reported (it wraps at 2³²).
     pub(super) sweeps_reported: u32,
+    /// The count of Newton steps run when last reported (it wraps at 2³²).
+    pub(super) newton_reported: u32,
 }
 
 /// Extra entries the `OpParams` and op-list buffers keep for operations run alone (tests).
@@ -174,6 +176,7 @@ impl ImplicitSolve {
             max_groups_x,
             n,
             sweeps_reported: 0,
+            newton_reported: 0,
         };
         solve.upload_tables(ctx);
         Ok(solve)
