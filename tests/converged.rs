@@ -124,7 +124,7 @@ fn an_accepted_newton_correction_never_raises_the_incremental_potential() {
         options.particle_distance = 0.04;
     }
     scene.solver.substeps = Some(4);
-    scene.solver.iterations = 1;
+    scene.solver.iterations = Some(1);
     scene.solver.settle_speed = None;
     scene.solver.frames = 36;
     let prep = prepare(&scene).unwrap();

@@ -254,7 +254,7 @@ fn large_steps_settle_where_small_symplectic_steps_do() {
         // solve's sweeps carry the cloth's weight to the pins slowly (Gauss–Seidel on a stiff
         // sheet): at 10 sweeps it still creeps after 10 s (2.3 mm away), so it gets 20 sweeps
         // per step and 30 s.
-        scene.solver.iterations = 20;
+        scene.solver.iterations = Some(20);
         scene.air_damping = 2.0;
         scene.solver.frames = 720;
         let prep = prepare(&scene).unwrap();
@@ -288,7 +288,7 @@ fn one_perturbed_step(
     tolerance: Option<f32>,
 ) -> Box<dyn Solver> {
     let mut scene = stiff_hanging(1, true);
-    scene.solver.iterations = iterations;
+    scene.solver.iterations = Some(iterations);
     scene.solver.tolerance = tolerance;
     let prep = prepare(&scene).unwrap();
     let mut solver = solver(&prep);

@@ -229,7 +229,7 @@ fn every_substep_solves_until_its_own_tolerance() {
     let mut scene = Scene::load(&fixture("scenes/hanging_cloth.toml")).unwrap();
     scene.solver.integrator = drapekit::model::layout::INTEGRATOR_IMPLICIT;
     scene.solver.substeps = Some(2);
-    scene.solver.iterations = 20;
+    scene.solver.iterations = Some(20);
     scene.solver.tolerance = Some(0.05);
     let prep = prepare(&scene).unwrap();
     assert!(prep.model.multigrid.is_some());

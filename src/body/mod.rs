@@ -8,6 +8,7 @@ pub mod motion;
 pub mod sdf;
 pub mod shapes;
 pub mod simplify;
+pub mod size;
 
 use crate::error::InputError;
 use crate::mesh::TriMesh;

@@ -181,6 +181,9 @@ impl Builder<'_> {
                 .collect()
         };
         match op {
+            // No kernel: `bench convergence`'s one-level comparison runs on the CPU only, and
+            // the solver refuses it (`ImplicitSolve::new`, `run_solve_ops`).
+            SolveOp::BlockJacobi => {}
             SolveOp::ContactPlanes => self.push(out, K::ContactPlanes, plain, n),
             SolveOp::Sweep { iteration } => {
                 for (p, count) in colours(self, 0, iteration) {

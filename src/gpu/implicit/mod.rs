@@ -103,6 +103,7 @@ impl ImplicitSolve {
         let device = &ctx.device;
         let n = model.len() as u32;
         let schedule = implicit_schedule(SolveShape::for_run(model, params, plan));
+        refuse_cpu_only(&schedule)?;
         let packed = hierarchy::pack(model);
         let max_groups_x = device.limits().max_compute_workgroups_per_dimension;
         let mut tables = Tables::default();
@@ -273,6 +274,7 @@ impl ImplicitSolve {
         ctx: &GpuContext,
         ops: &[SolveOp],
     ) -> Result<Vec<Dispatch>, Error> {
+        refuse_cpu_only(ops)?;
         let mut builder = self.builder();
         let dispatches = builder.expand(ops);
         self.check_dispatches(ctx, &dispatches)?;
@@ -294,5 +296,16 @@ impl ImplicitSolve {
         }
         self.upload_tables(ctx);
         Ok(())
+    }
+}
+
+/// An error for operations that only the CPU runs (block-Jacobi preconditioning, which
+/// `bench convergence` compares the V-cycle with).
+fn refuse_cpu_only(ops: &[SolveOp]) -> Result<(), Error> {
+    match ops.contains(&SolveOp::BlockJacobi) {
+        true => Err(Error::Gpu(
+            "block-Jacobi preconditioning runs on the CPU backend only".into(),
+        )),
+        false => Ok(()),
     }
 }
