@@ -154,8 +154,16 @@ fn parity_vbd_stages_with_two_bodies() {
     // The pinched cotton as shipped (implicit), its clamp closed: every vertex's Newton step
     // adds the table's and the clamp's contact, each sampled at its own SDF nodes.
     let Some(ctx) = gpu() else { return };
-    let (prep, state, step) = common::pinched();
+    let (mut prep, state, step) = common::pinched();
     assert!(prep.plan.contains(Pass::VbdSolve) && prep.model.colliders.len() == 2);
+    // Ten Newton steps, not the scene's one: the state puts vertices at random depths around
+    // both contact layers, and a correction or sweep step that would enter a layer lands on it
+    // at the fraction gap/approach of its length, which for a step nearly parallel to the
+    // layer turns the backends' 1e-9 m difference in the gap into micrometres (measured: 5e-6 m
+    // after one Newton step's correction, 6e-4 m after the next sweep). Converged, both reach
+    // the same minimum, which the rounding bound below covers; the per-stage parity of every
+    // kernel from identical inputs is tests/implicit_stages.
+    prep.params.iterations = 10;
     let passes = [Pass::VbdInit, Pass::VbdSolve, Pass::VbdFinish];
     let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
     let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
