@@ -1,6 +1,6 @@
-// Implicit Euler 3/3: the next state from the solved positions, x_{n+1} = x and
-// v_{n+1} = (x − xₙ)/h, written to the other texture of each ping-pong pair. Pinned particles
-// keep their position and have zero velocity. CPU twin: src/cpu/vbd_finish.rs.
+// Implicit Euler 3/3: the next state from the solved displacements D, x_{n+1} = xₙ + D and
+// v_{n+1} = D/h, written to the other texture of each ping-pong pair. Pinned particles keep
+// their position and have zero velocity. CPU twin: src/cpu/vbd_finish.rs.
 
 @group(0) @binding(0) var<uniform> params: SimParams;
 @group(0) @binding(1) var pos: texture_2d<f32>;
@@ -20,7 +20,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         textureStore(vel_out, texel(i), vec4<f32>(0.0));
         return;
     }
-    let next = x[i].xyz;
-    textureStore(pos_out, texel(i), vec4<f32>(next, p.w));
-    textureStore(vel_out, texel(i), vec4<f32>((next - p.xyz) / params.dt, 0.0));
+    let d = x[i].xyz;
+    textureStore(pos_out, texel(i), vec4<f32>(p.xyz + d, p.w));
+    textureStore(vel_out, texel(i), vec4<f32>(d / params.dt, 0.0));
 }

@@ -1,5 +1,6 @@
 //! Errors, split by who must act: bad input (the user fixes a file, exit 2), an unstable
-//! simulation (the user changes the scene, exit 3), and environment failures (exit 1).
+//! simulation (the user changes the scene, exit 3), warnings under `--strict` (exit 5), and
+//! environment failures (exit 1).
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -35,13 +36,9 @@ pub enum Error {
     /// Writing an output file failed (a full disk, a lost permission); its temporary file was
     /// removed, so nothing half-written is left.
     #[error(
-        "cannot write {file} in {}: {source}{}; nothing half-written was left there",
+        "cannot write {file} in {}: {source}; nothing half-written was left there\n  fix: {}",
         dir.display(),
-        if source.kind() == std::io::ErrorKind::StorageFull {
-            " (the disk is full: free space on it, or write fewer frames)"
-        } else {
-            ""
-        }
+        io_fix(dir, source)
     )]
     Write {
         /// The file's name.
@@ -54,17 +51,22 @@ pub enum Error {
     /// Some items of a batch failed; each recorded its error in its own folder (exit 4).
     #[error("{0}")]
     ItemsFailed(String),
+    /// `--strict`, and the run had warnings (exit 5); a finished run wrote its results first.
+    #[error("{0}")]
+    Warnings(String),
 }
 
 impl Error {
     /// Process exit code for this error: 2 for bad input, 3 for an unstable run, 4 for a batch
-    /// with failed items, 130 for an interrupted run (the shell's code for SIGINT), 1 otherwise.
+    /// with failed items, 5 for warnings under `--strict`, 130 for an interrupted run (the
+    /// shell's code for SIGINT), 1 otherwise.
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Input(_) => 2,
             Error::Unstable(_) => 3,
             Error::Interrupted { .. } => 130,
             Error::ItemsFailed(_) => 4,
+            Error::Warnings(_) => 5,
             Error::Gpu(_) | Error::Io { .. } | Error::Write { .. } => 1,
         }
     }
@@ -102,8 +104,8 @@ fn io_fix(path: &Path, source: &std::io::Error) -> String {
             path.display()
         ),
         K::StorageFull | K::QuotaExceeded | K::FileTooLarge => format!(
-            "the disk holding {folder} is full: free space there, or choose a folder on another \
-             disk with --out DIR"
+            "the disk holding {folder} is full: free space there, write fewer frames, or choose \
+             a folder on another disk with --out DIR"
         ),
         _ => format!("check that {folder} exists and that you may read and write in it"),
     }

@@ -5,9 +5,9 @@
 //! a [`solver::Solver`] ([`gpu::GpuSolver`] or [`cpu::CpuSolver`]) → frames and a summary.
 //!
 //! Modules form layers that import only downward (docs/src/architecture.md): ground
-//! (`error`, `check`, `atomic_file`, `suggest`, `toml_message`) → geometry (`mesh`, `pattern`, `body`) → `scene` →
+//! (`error`, `check`, `atomic_file`, `suggest`, `toml_message`, `progress`) → geometry (`mesh`, `pattern`, `body`) → `scene` →
 //! `model` → `plan` and `solver` → backends (`cpu`, `gpu`) and `metrics` → `sim` → outputs
-//! (`run`, `output`, `export`, `bench`, `plot`, `batch`) → the CLI.
+//! (`run`, `run_folder`, `output`, `health`, `export`, `bench`, `plot`, `batch`) → the CLI.
 #![warn(missing_docs)]
 
 pub mod atomic_file;
@@ -20,6 +20,7 @@ pub mod cpu;
 pub mod error;
 pub mod export;
 pub mod gpu;
+pub mod health;
 pub mod mesh;
 pub mod metrics;
 pub mod model;
@@ -28,7 +29,9 @@ pub mod pattern;
 pub mod plan;
 pub mod plot;
 pub mod preview;
+pub mod progress;
 pub mod run;
+pub mod run_folder;
 pub mod scene;
 pub mod sim;
 pub mod solver;

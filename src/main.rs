@@ -43,16 +43,24 @@ enum Command {
         /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
         #[arg(long, default_value = "auto")]
         adapter: AdapterChoice,
-        /// Override the number of output frames.
-        #[arg(long)]
+        /// Override the number of output frames (1 or more).
+        #[arg(long, value_parser = parse_frames)]
         frames: Option<u32>,
-        /// No progress bar.
+        /// No progress bars.
         #[arg(long)]
         quiet: bool,
         /// Write checkpoint.bin every N frames (Ctrl-C always writes one); continue with
         /// `drapekit resume OUT`.
         #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
         checkpoint_every: Option<u32>,
+        /// Treat warnings as errors: exit 5 before the run when an input is implausible, and
+        /// after it (with every file written) when the result has warnings.
+        #[arg(long)]
+        strict: bool,
+        /// Replace another run's results in the output folder (a rerun of the same scene
+        /// replaces its own without it). Only drapekit's own files are removed.
+        #[arg(long)]
+        overwrite: bool,
     },
     /// Continue a run from the checkpoint in its output folder (same scene, backend, adapter).
     #[command(after_help = "Examples:\n  \
@@ -62,11 +70,14 @@ enum Command {
         /// The run's output folder (holding checkpoint.bin).
         dir: PathBuf,
         /// Run to this many output frames instead of the original count.
-        #[arg(long)]
+        #[arg(long, value_parser = parse_frames)]
         frames: Option<u32>,
-        /// No progress bar.
+        /// No progress bars.
         #[arg(long)]
         quiet: bool,
+        /// Exit 5 (with every file written) when the result has warnings.
+        #[arg(long)]
+        strict: bool,
     },
     /// List the GPU adapters, the one `--adapter auto` picks, and the CPU.
     #[command(after_help = "Example:\n  \
@@ -81,6 +92,7 @@ enum Command {
         drapekit preview out/tshirt_drape_cotton --out shirt.png\n  \
         drapekit preview out/tshirt_drape_cotton --mode strain --strain-max 0.1 --seams --out strain.png\n  \
         drapekit preview out/tshirt_drape_cotton --checker 0.05 --out grain.png\n  \
+        drapekit preview out/tshirt_drape_cotton --turntable --out turntable.gif\n  \
         drapekit preview out/skirt_rotating_implicit --camera front --out skirt.gif\n  \
         drapekit preview out/drape_sphere --frame 0 --camera front --size 3840x2160 --out big.png"
     )]
@@ -94,13 +106,15 @@ enum Command {
         /// three-quarter).
         #[arg(long)]
         camera: Option<drapekit::preview::CameraPreset>,
-        /// fabric; strain (each triangle's stretch against frame 0, blue 0% to red at
-        /// --strain-max); or penetration (distance to the body: red inside, yellow within the
-        /// contact thickness, green beyond).
+        /// fabric (the fabric's colour or image, folds darkened by ambient occlusion); strain
+        /// (each triangle's stretch against frame 0, blue 0% to red at --strain-max); or
+        /// penetration (distance to the body: red inside, yellow within the contact thickness,
+        /// green beyond).
         #[arg(long, default_value = "fabric")]
         mode: drapekit::preview::ColorMode,
         /// The strain shown in full red, as a fraction: 0.2 = 20% (default: the scene's
-        /// [preview] strain_max, else 0.2).
+        /// [preview] strain_max, else the fabric preset's range: 5% for wovens, 20% for the
+        /// knit, 15% for leather; 20% without a preset).
         #[arg(long, value_parser = parse_strain_max)]
         strain_max: Option<f32>,
         /// Draw the garment's seams as dark lines (also on with [preview] seams = true).
@@ -120,6 +134,10 @@ enum Command {
         /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
         #[arg(long, default_value = "auto")]
         adapter: AdapterChoice,
+        /// Spin the frame (--frame, default the last) a full turn around the body: a looping
+        /// GIF of 36 views, 3.6 s a turn (--out must end in .gif).
+        #[arg(long)]
+        turntable: bool,
         /// The PNG to write; a name ending in .gif writes every frame of the run as a looping
         /// animation instead (default size: the scene's [preview] animation_size, else 480x360).
         #[arg(long)]
@@ -183,8 +201,8 @@ struct BatchCli {
     /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
     #[arg(long, default_value = "auto")]
     adapter: AdapterChoice,
-    /// Override every scene's number of output frames.
-    #[arg(long)]
+    /// Override every scene's number of output frames (1 or more).
+    #[arg(long, value_parser = parse_frames)]
     frames: Option<u32>,
 }
 
@@ -213,6 +231,17 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
         }
     };
     Ok((side(w)?, side(h)?))
+}
+
+/// `--frames`: a whole number of output frames, at least 1 (frame 0 is the starting state).
+fn parse_frames(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(0) => {
+            Err("0 frames simulate nothing (frame 0 is the starting state): give 1 or more".into())
+        }
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!("{s:?} is not a whole number of frames, e.g. 48")),
+    }
 }
 
 /// A strain as a fraction, from 0.001 to 5 (0.1% to 500%).
@@ -269,8 +298,25 @@ fn execute(command: Command) -> Result<(), Error> {
             frames,
             quiet,
             checkpoint_every,
+            strict,
+            overwrite,
         } => {
             let scene = Scene::load(&scene)?;
+            drapekit::progress::enable(!quiet);
+            if strict {
+                // Implausible inputs stop a strict run before its long part.
+                let mut found = drapekit::health::scene_warnings(&scene)?;
+                found.extend(drapekit::model::budget::load_warnings(&scene));
+                if !found.is_empty() {
+                    for w in &found {
+                        eprintln!("drapekit: warning: {w}");
+                    }
+                    return Err(Error::Warnings(format!(
+                        "--strict: {} warning(s) about the scene's inputs (above); nothing was run",
+                        found.len()
+                    )));
+                }
+            }
             let opts = RunOptions {
                 backend,
                 adapter,
@@ -278,18 +324,25 @@ fn execute(command: Command) -> Result<(), Error> {
                 frames,
                 progress: !quiet,
                 checkpoint_every,
+                overwrite,
             };
             let out_dir = out.unwrap_or_else(|| scene.output.dir.clone());
             stop_on_ctrl_c();
             let summary = run_scene(&scene, &opts)?;
             report(&summary, &out_dir);
-            Ok(())
+            strict_check(strict, &summary)
         }
-        Command::Resume { dir, frames, quiet } => {
+        Command::Resume {
+            dir,
+            frames,
+            quiet,
+            strict,
+        } => {
             stop_on_ctrl_c();
+            drapekit::progress::enable(!quiet);
             let summary = drapekit::run::resume_run(&dir, frames, !quiet)?;
             report(&summary, &dir);
-            Ok(())
+            strict_check(strict, &summary)
         }
         Command::Info => {
             let info = drapekit::gpu::adapters();
@@ -338,6 +391,7 @@ fn execute(command: Command) -> Result<(), Error> {
         }
         Command::Plan { scene, json } => {
             let scene = Scene::load(&scene)?;
+            drapekit::progress::enable(!json);
             for w in drapekit::model::budget::load_warnings(&scene) {
                 eprintln!("drapekit: warning: {w}");
             }
@@ -429,6 +483,7 @@ fn execute(command: Command) -> Result<(), Error> {
             checker,
             size,
             adapter,
+            turntable,
             out,
         } => {
             if let Some(c) = checker.filter(|c| !(c.is_finite() && *c > 0.0 && *c <= 10.0)) {
@@ -455,7 +510,7 @@ fn execute(command: Command) -> Result<(), Error> {
                 }
                 look.legend = !no_legend;
             };
-            drapekit::preview::preview_run(&run, frame, mode, &adapter, adjust, &out)?;
+            drapekit::preview::preview_run(&run, frame, mode, &adapter, adjust, turntable, &out)?;
             println!("wrote {}", out.display());
             Ok(())
         }
@@ -522,20 +577,23 @@ fn report(summary: &drapekit::output::Summary, out_dir: &std::path::Path) {
             c.wall_seconds
         );
     }
-    if let Some(s) = &summary.settled {
-        let residual = s.force_residual_rms.map_or(String::new(), |r| {
-            format!(", force residual {r:.2e} of the weight")
-        });
-        println!(
-            "settled at frame {} (RMS speed {:.2e} m/s{residual})",
-            s.frame, s.rms_speed_m_s
-        );
-    }
+    println!("{}", drapekit::health::block(summary));
     println!(
         "wrote {} files to {}",
         summary.outputs.len(),
         out_dir.display()
     );
+}
+
+/// `--strict`: a run with warnings is an error (exit 5), after its results were written.
+fn strict_check(strict: bool, summary: &drapekit::output::Summary) -> Result<(), Error> {
+    if strict && !summary.warnings.is_empty() {
+        return Err(Error::Warnings(format!(
+            "--strict: the run has {} warning(s) (listed above); its files are written",
+            summary.warnings.len()
+        )));
+    }
+    Ok(())
 }
 
 /// Ctrl-C finishes the current frame, writes a checkpoint and exits with 130; a second Ctrl-C

@@ -7,8 +7,10 @@ use serde::Serialize;
 /// `summary.json`. Field names are stable: later versions add fields, never rename them.
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
-    /// The scene file.
+    /// The scene file, as an absolute path (its text is `scene.toml` in the output folder).
     pub scene: String,
+    /// Every file the run read, as absolute paths.
+    pub inputs: crate::run_folder::Inputs,
     /// "cpu" or "gpu".
     pub backend: String,
     /// Why the backend differs from the one asked for, if it does.
@@ -83,6 +85,9 @@ pub struct Summary {
     pub max_edge_strain: f32,
     /// Largest spring strain at the last frame (the result; sewing can strain more on the way).
     pub last_frame_max_edge_strain: f32,
+    /// The 99th percentile of the spring strains at the last frame: what the cloth as a whole
+    /// rests at, apart from the few most pinched edges.
+    pub last_frame_edge_strain_p99: f32,
     /// The strain-limiting stage's cap on edge stretch (0.1 = 10%), or null when it is off.
     pub strain_limit: Option<f32>,
     /// With the cap on: the edges at it in the last frame (stretched to within 0.1% of the cap
@@ -115,6 +120,9 @@ pub struct Summary {
     /// Particles resting on a body at the last frame: outside it and within the collision
     /// thickness plus 1 mm of its exact surface.
     pub body_contacts: Option<usize>,
+    /// Where a body shows through the cloth at the last frame (`null` without a body, or when
+    /// the run stopped on an error).
+    pub body_show_through: Option<crate::metrics::ShowThrough>,
     /// The (first) body's SDF: grid, bake time, memory, cache.
     pub sdf: Option<crate::body::sdf::BakeReport>,
     /// Every body's SDF, in scene order (empty without a body).

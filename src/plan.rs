@@ -293,6 +293,10 @@ pub enum SolveOp {
     ApplyCorrection,
     /// The force residual at the iterate (`force_residual`).
     ForceResidual,
+    /// z = D⁻¹r on the fine level, D its diagonal blocks (`block_jacobi`): the one-level
+    /// preconditioner `bench convergence` compares the V-cycle with (the CPU runs it; no shipped
+    /// schedule does).
+    BlockJacobi,
     /// Ends the substep's solve if the last force residual is within the tolerance.
     CheckConverged,
 }
@@ -319,6 +323,7 @@ impl SolveOp {
             SolveOp::LineSearch => "line_search",
             SolveOp::ApplyCorrection => "apply_correction",
             SolveOp::ForceResidual => "force_residual",
+            SolveOp::BlockJacobi => "block_jacobi",
             SolveOp::CheckConverged => "check_converged",
         }
     }
@@ -376,7 +381,8 @@ pub const LEVEL_SMOOTHING: [u32; 2] = [4, 2];
 /// Symmetric block Gauss–Seidel sweeps (forward then backward) on the coarsest level.
 pub const COARSEST_SWEEPS: u32 = 10;
 
-/// The operations of one implicit substep. Without coarse levels: `iterations` sweeps. With
+/// The operations of one implicit substep. Without coarse levels: `iterations` sweeps (with a
+/// tolerance, the force residual checked before each but the first). With
 /// them, `iterations` Newton steps, each after `smoothing` fine sweeps: the fine system
 /// assembled, its coarse levels' Galerkin matrices, `linear_iterations` of conjugate gradients
 /// preconditioned by a multigrid V-cycle, and a line search on G along the result; then
@@ -395,7 +401,14 @@ pub fn implicit_schedule(shape: SolveShape) -> Vec<SolveOp> {
         }
     };
     if shape.levels == 0 {
-        sweeps(&mut ops, shape.iterations);
+        for k in 0..shape.iterations {
+            // A tolerance is checked before every sweep but the first (each check costs about
+            // what a sweep does).
+            if shape.tolerance && k > 0 {
+                ops.extend([SolveOp::ForceResidual, SolveOp::CheckConverged]);
+            }
+            sweeps(&mut ops, 1);
+        }
         ops.push(SolveOp::ForceResidual);
         return ops;
     }
@@ -422,6 +435,26 @@ pub fn newton_correction(shape: SolveShape) -> Vec<SolveOp> {
     ops.push(SolveOp::PcgStart);
     for k in 0..shape.linear_iterations {
         v_cycle(&mut ops, shape.levels);
+        ops.push(SolveOp::PcgDirection { first: k == 0 });
+        ops.extend([SolveOp::PcgMatVec, SolveOp::PcgStep]);
+    }
+    ops.extend([
+        SolveOp::CorrectionFilter,
+        SolveOp::LineEnergy,
+        SolveOp::LineSearch,
+        SolveOp::ApplyCorrection,
+    ]);
+    ops
+}
+
+/// One Newton step's correction as `newton_correction`'s, preconditioned by the fine matrix's
+/// block diagonal instead of a V-cycle, with `iterations` conjugate-gradient iterations: the
+/// single-level alternative (Newton with block-Jacobi conjugate gradients) that
+/// `bench convergence` measures against the multigrid one.
+pub fn newton_correction_block_jacobi(iterations: u32) -> Vec<SolveOp> {
+    let mut ops = vec![SolveOp::Assemble, SolveOp::PcgStart];
+    for k in 0..iterations {
+        ops.push(SolveOp::BlockJacobi);
         ops.push(SolveOp::PcgDirection { first: k == 0 });
         ops.extend([SolveOp::PcgMatVec, SolveOp::PcgStep]);
     }

@@ -72,6 +72,9 @@ pub struct RunOptions {
     pub progress: bool,
     /// Write `checkpoint.bin` every this many frames (and always when interrupted).
     pub checkpoint_every: Option<u32>,
+    /// Replace the results of another run in the output folder (a rerun of the same scene
+    /// replaces its own without it).
+    pub overwrite: bool,
 }
 
 /// Creates the chosen backend; with `Auto`, falls back to the CPU and returns a note saying why.
@@ -163,6 +166,7 @@ pub fn adapter_named(adapter: &AdapterChoice) -> bool {
 ///     frames: Some(2),
 ///     progress: false,
 ///     checkpoint_every: None,
+///     overwrite: false,
 /// };
 /// let summary = run_scene(&scene, &options)?;
 /// assert!(summary.finite);
@@ -209,6 +213,7 @@ pub fn resume_run(
         frames: frames.or(h.frames),
         progress,
         checkpoint_every: h.checkpoint_every,
+        overwrite: false,
     };
     run_scene_from(&scene, &opts, Some(checkpoint))
 }
@@ -220,7 +225,22 @@ fn run_scene_from(
 ) -> Result<Summary, Error> {
     let mut scene = scene.clone();
     if let Some(frames) = opts.frames {
-        scene.solver.frames = frames;
+        scene.solver.frames = crate::health::inputs::check_frames(&scene, frames)?;
+    }
+    let out_dir = opts
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| scene.output.dir.clone());
+    // A resumed run continues in its own folder; a new one must not mix with another's.
+    let stale = match resume {
+        None => crate::run_folder::check(&out_dir, &scene, opts.overwrite)?,
+        Some(_) => Vec::new(),
+    };
+    // Before the distance field is baked (a body in the wrong unit is named before its SDF's
+    // size is refused) and before the long part of the run.
+    let input_warnings = crate::health::scene_warnings(&scene)?;
+    for w in &input_warnings {
+        eprintln!("drapekit: warning: {w}");
     }
     // Values that compute but no real scene has: said before anything slow starts.
     let load_warnings = crate::model::budget::load_warnings(&scene);
@@ -239,10 +259,6 @@ fn run_scene_from(
         // The estimate cannot see an OBJ cloth's size; the built model can.
         crate::model::budget::check_model_textures(&scene, &prep.model, ctx.max_texels())?;
     }
-    let out_dir = opts
-        .out_dir
-        .clone()
-        .unwrap_or_else(|| scene.output.dir.clone());
     // Refused before anything is simulated or written: the files must fit the disk.
     let from_frame = resume.as_ref().map_or(0, |c| c.header.frame);
     crate::export::disk::check_space(&scene, &prep, &out_dir, from_frame)?;
@@ -262,7 +278,7 @@ fn run_scene_from(
     for w in &warnings {
         eprintln!("drapekit: warning: {w}");
     }
-    warnings.extend(load_warnings);
+    warnings.splice(0..0, input_warnings.into_iter().chain(load_warnings));
     // Before the output folder exists: a coarse start that cannot settle is bad input. A
     // resumed run continues from its checkpoint, past any coarse start.
     let coarse = match (&scene.cloth, &resume) {
@@ -275,20 +291,24 @@ fn run_scene_from(
         ) => Some(coarse_start(&scene, *distance, device.as_ref(), &prep)?),
         _ => None,
     };
-    std::fs::create_dir_all(&out_dir).map_err(|e| Error::io(&out_dir, e))?;
-    let stale = crate::atomic_file::remove_stale_temporaries(&out_dir);
-    if !stale.is_empty() {
+    crate::run_folder::clear(&out_dir, &stale)?;
+    let temporaries = crate::atomic_file::remove_stale_temporaries(&out_dir);
+    if !temporaries.is_empty() {
         eprintln!(
             "drapekit: removed {} temporary file(s) a stopped run left in {}: {}",
-            stale.len(),
+            temporaries.len(),
             out_dir.display(),
-            stale.join(", ")
+            temporaries.join(", ")
         );
     }
 
     let mut outputs = Vec::new();
+    if resume.is_none() {
+        outputs.push(crate::run_folder::write_scene_copy(&out_dir, &scene)?);
+    }
+    let scene_path = crate::run_folder::absolute(&scene.path);
     let mut stats = RunStats::default();
-    let mut exporter = Exporter::new(&prep, &scene.output, &out_dir);
+    let mut exporter = Exporter::new(&prep, &scene, &out_dir);
     let coarse_started = coarse.is_some();
     let resume = match resume {
         None => coarse.map(|(from, coarse_stats)| {
@@ -328,7 +348,7 @@ fn run_scene_from(
         Checkpoint {
             header: CheckpointHeader {
                 drapekit_version: env!("CARGO_PKG_VERSION").to_string(),
-                scene_path: scene.path.clone(),
+                scene_path: scene_path.clone(),
                 scene_text: scene.source.clone(),
                 backend: opts.backend.name().to_string(),
                 adapter: opts.adapter.to_string(),
@@ -397,16 +417,30 @@ fn run_scene_from(
     // frames (the settle rule, or a frame count that is not a multiple). The solver still
     // holds its positions.
     let last = stats.frames_run;
-    if result.is_ok() && exporter.wants_frames() && !exporter.on_schedule(last) {
-        outputs.extend(exporter.frame(last, &solver.state()?.positions)?);
-        previews.frame_written(last);
+    let last_state = if result.is_ok() {
+        Some(solver.state()?)
+    } else {
+        None
+    };
+    if let Some(state) = last_state.as_ref() {
+        if exporter.wants_frames() && !exporter.on_schedule(last) {
+            outputs.extend(exporter.frame(last, &state.positions)?);
+            previews.frame_written(last);
+        }
     }
+    let positions = last_state.as_ref().map(|state| &state.positions[..]);
+    let (show_through, found) = crate::health::last_frame(&prep, &stats, positions, last);
+    warnings.extend(found);
     let checkpoint_name = crate::checkpoint::CHECKPOINT_FILE.to_string();
     if out_dir.join(&checkpoint_name).is_file() && !outputs.contains(&checkpoint_name) {
         outputs.push(checkpoint_name);
     }
     // The caches hold the frames written so far, also when the run stopped early.
     outputs.extend(exporter.finish()?);
+    for w in &exporter.warnings {
+        eprintln!("drapekit: warning: {w}");
+    }
+    warnings.append(&mut exporter.warnings);
     if result.is_ok() && previews.wanted() {
         let (names, missing) = previews.finish();
         outputs.extend(names);
@@ -419,7 +453,8 @@ fn run_scene_from(
     let substeps_run = stats.frames_run as f64 * prep.substeps as f64;
     let first_body = prep.model.colliders.first();
     let summary = Summary {
-        scene: scene.path.display().to_string(),
+        scene: scene_path.display().to_string(),
+        inputs: crate::run_folder::inputs(&scene),
         backend: solver.backend_name().to_string(),
         backend_note,
         adapter: solver.adapter(),
@@ -483,6 +518,7 @@ fn run_scene_from(
             .names(),
         max_edge_strain: stats.max_edge_strain,
         last_frame_max_edge_strain: stats.last_edge_strain,
+        last_frame_edge_strain_p99: stats.last_edge_strain_p99,
         strain_limit: (prep.plan.contains(crate::plan::Pass::StrainLimit))
             .then_some(prep.params.strain_limit),
         strain_limit_clamped_edges: stats.strain_limit_clamped_edges,
@@ -512,6 +548,7 @@ fn run_scene_from(
         }),
         max_penetration_m: first_body.map(|_| stats.max_penetration_m),
         body_contacts: first_body.map(|_| stats.body_contacts),
+        body_show_through: show_through,
         sdf: first_body.map(|c| c.bake.clone()),
         body_sdfs: (prep.model.colliders.iter())
             .map(|c| c.bake.clone())

@@ -61,9 +61,9 @@ fn run_writes_frames_and_a_complete_summary() {
         summary["passes"],
         serde_json::json!(["hinge_forces", "spring_forces", "integrate", "strain_limit"])
     );
-    // Frames 0..=3 plus the summary, and each listed file exists.
+    // The scene's copy, frames 0..=3 and the summary, and each listed file exists.
     let outputs = summary["outputs"].as_array().unwrap();
-    assert_eq!(outputs.len(), 5);
+    assert_eq!(outputs.len(), 6);
     for f in outputs {
         assert!(out.join(f.as_str().unwrap()).is_file(), "{f} missing");
     }
@@ -422,8 +422,9 @@ fn plan_names_what_limits_the_substep() {
 
 #[test]
 fn tshirt_drape_cotton_sews_rests_and_stays_out_of_the_body() {
-    // Woven cotton at its measured stiffness, implicit Euler at 8 steps of 3 sweeps per frame,
-    // run whole on the CPU path (about 8 s): sewn, then gravity, then the settle rule stops it.
+    // Woven cotton at its measured stiffness, implicit Euler at 8 substeps of one Newton step a
+    // frame, the strain limiter off, run whole on the CPU path: sewn, then gravity, then the
+    // settle rule (speed and force residual) stops it.
     let out = out_dir("tshirt_drape_cotton");
     let r = drapekit(&[
         "run",
@@ -440,14 +441,27 @@ fn tshirt_drape_cotton_sews_rests_and_stays_out_of_the_body() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let f = |key: &str| summary[key].as_f64().unwrap_or(f64::NAN);
     assert_eq!(summary["integrator"], "implicit");
+    assert!(
+        summary["strain_limit"].is_null(),
+        "the cap must be off: {summary:#}"
+    );
     assert!(summary["settled"].is_object(), "not settled: {summary:#}");
+    // Settled means the solve balanced the forces, not only that the cloth slowed down.
+    assert!(f("force_residual_rms") <= 0.05, "{summary:#}");
     assert_eq!(summary["seams_closed"], summary["seams"], "{summary:#}");
     // The collision thickness is 3 mm; particles are measured against the exact mesh.
     assert!(f("max_penetration_m") <= 0.003, "{summary:#}");
-    // Woven cotton stretches a few percent in wear (docs/src/fabrics.md): at rest no edge
-    // may be stretched past 5%. The CPU path gives the same bits on every machine and thread
-    // count, so this is 2.86% wherever it runs; the strain limit (10%) is not what holds it.
-    assert!(f("last_frame_max_edge_strain") <= 0.05, "{summary:#}");
+    // Woven cotton carries a draped shirt's few N/m at a fraction of a percent of strain: 99% of
+    // the edges must rest under 2%. The few most stretched edges sit where the pattern is tight
+    // on the mannequin; symplectic Euler at its stable step (the converged reference, 2,249
+    // substeps a frame; docs/src/implicit.md) rests at 2.15% there, and the implicit solve must
+    // stay within 1.5 times that. The CPU path gives the same bits on every machine and thread
+    // count (2.08% and 0.82% when measured).
+    assert!(f("last_frame_edge_strain_p99") <= 0.02, "{summary:#}");
+    assert!(
+        f("last_frame_max_edge_strain") <= 1.5 * 0.0215,
+        "{summary:#}"
+    );
     for name in ["preview_fabric.png", "preview_strain.png"] {
         let path = out.join(name);
         if common::gpu().is_some() {

@@ -126,14 +126,24 @@ fn run_coarse_started_shirt(backend: &[&str], tag: &str) -> serde_json::Value {
             assert!(out.join(name).is_file(), "{name} missing: {summary:#}");
         }
     }
-    // Three sweeps a substep and no tolerance: the mean over the full mesh's frames is 3.
-    assert_eq!(f(&summary["iterations_mean"]), 3.0, "{summary:#}");
-    // The same bars as the shirt without a coarse start (tests/cli.rs): seams closed, nothing
-    // deeper in the body than the 3 mm thickness, and at most 5% strain at rest.
+    // One Newton step a substep with two smoothing sweeps before and after it, and no
+    // tolerance: the means over the full mesh's frames are exactly 1 and 4.
+    assert_eq!(f(&summary["newton_steps_mean"]), 1.0, "{summary:#}");
+    assert_eq!(f(&summary["iterations_mean"]), 4.0, "{summary:#}");
+    // The bars of the shirt without a coarse start (tests/cli.rs): seams closed, nothing
+    // deeper in the body than the 3 mm thickness, 99% of the edges under 2% strain at rest.
     assert_eq!(summary["seams_closed"], summary["seams"], "{summary:#}");
     assert!(f(&summary["max_penetration_m"]) <= 0.003, "{summary:#}");
     assert!(
-        f(&summary["last_frame_max_edge_strain"]) <= 0.05,
+        f(&summary["last_frame_edge_strain_p99"]) <= 0.02,
+        "{summary:#}"
+    );
+    // The most stretched edges keep part of what the 4 cm mesh left where static friction
+    // holds the cloth on the body (5.0% here, against 2.1% without a coarse start; 3.4% with
+    // five times the friction's creep speed: docs/src/implicit.md); the carry and the full
+    // mesh's own solve must not add to it.
+    assert!(
+        f(&summary["last_frame_max_edge_strain"]) <= f(&coarse["max_edge_strain"]),
         "{summary:#}"
     );
     // The full mesh's rate counts its own frames and time only.

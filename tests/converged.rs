@@ -47,12 +47,12 @@ fn potential(s: &Implicit, d: &[Vec4]) -> (f64, f64) {
         size += v.abs();
     };
     let n = p.num_particles as usize;
-    for i in 0..n {
+    for (i, &di) in d.iter().enumerate().take(n) {
         if s.prev[i].w == 0.0 {
             continue;
         }
         let m = 1.0 / s.prev[i].w as f64;
-        let di = d3(d[i]);
+        let di = d3(di);
         add(0.5 * m / (h * h) * (di - d3(s.target[i])).length_squared());
         add(0.5 * p.air_damping as f64 * m / h * di.length_squared());
         let k_c = s.contact_stiffness(i) as f64;
@@ -124,7 +124,7 @@ fn an_accepted_newton_correction_never_raises_the_incremental_potential() {
         options.particle_distance = 0.04;
     }
     scene.solver.substeps = Some(4);
-    scene.solver.iterations = 1;
+    scene.solver.iterations = Some(1);
     scene.solver.settle_speed = None;
     scene.solver.frames = 36;
     let prep = prepare(&scene).unwrap();

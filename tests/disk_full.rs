@@ -37,6 +37,7 @@ fn a_write_that_fails_names_its_file_and_leaves_nothing() {
         frames: Some(12),
         progress: false,
         checkpoint_every: Some(1),
+        overwrite: false,
     };
     // A frame file of this cloth is about 100 KB and a checkpoint about 35 KB: the disk
     // fills in the middle of the fourth or fifth frame file.
@@ -153,7 +154,8 @@ fn fill_mid_run_then_resume(disk: &Path) {
             "the frame or checkpoint failed first: {error}"
         );
         assert!(error.contains(&format!("in {}", out.display())), "{error}");
-        assert!(error.contains("disk is full"), "{error}");
+        assert!(error.contains("No space left"), "{error}");
+        assert!(stderr.contains("fix: the disk holding"), "{stderr}");
         assert!(temporaries(&out).is_empty(), "{:?}", temporaries(&out));
         std::fs::remove_file(&filler).unwrap();
         std::fs::write(out.join(".frame_0050.obj.4242.9.tmp"), b"partial").unwrap();

@@ -25,6 +25,7 @@ fn options(out: &Path, frames: u32) -> RunOptions {
         frames: Some(frames),
         progress: false,
         checkpoint_every: None,
+        overwrite: false,
     }
 }
 
@@ -121,14 +122,15 @@ fn skirt_on_a_turning_body_exports_obj_body_pc2_and_glb() {
     let written = [0u32, 2, 4, 5];
     let names = outputs(&out);
     for f in written {
-        for name in [format!("frame_{f:04}.obj"), format!("body_{f:04}.obj")] {
-            assert!(names.contains(&name), "{name} not in {names:?}");
-        }
+        let name = format!("frame_{f:04}.obj");
+        assert!(names.contains(&name), "{name} not in {names:?}");
     }
-    assert!(names.contains(&"cloth.pc2".into()) && names.contains(&"garment.glb".into()));
+    for name in ["cloth.pc2", "garment.glb", "body.obj", "body.glb"] {
+        assert!(names.contains(&name.to_string()), "{name} not in {names:?}");
+    }
     assert!(
-        !out.join("body.obj").exists(),
-        "a moving body is written per frame"
+        !names.iter().any(|n| n.starts_with("body_")),
+        "a moving body is one mesh, not one per frame: {names:?}"
     );
 
     // OBJ: one vn and one vt per particle, a group per panel holding that panel's triangles,
@@ -163,24 +165,29 @@ fn skirt_on_a_turning_body_exports_obj_body_pc2_and_glb() {
     // Unit normals, written to f32's shortest exact digits, so within f32 rounding of 1.
     assert!(last.vn.iter().all(|v| (v.length() - 1.0).abs() < 1e-6));
 
-    // Body: world coordinates at each frame's time (frame × frame length, as the run loop
-    // times frames); the same f32 arithmetic and exact printing give the very same numbers.
+    // Body: world coordinates at the first frame's time (frame × frame length, as the run
+    // loop times frames); the same f32 arithmetic and exact printing give the very same
+    // numbers.
     let c = &prep.model.colliders[0];
     let time = |f: u32| f as f32 * prep.frame_dt;
-    for f in written {
-        let pose = c.motion.at(time(f));
-        let body = read_obj(&out.join(format!("body_{f:04}.obj")));
-        let expected: Vec<Vec3> = (c.body.mesh.positions.iter())
-            .map(|p| pose.rotation * *p + pose.translation)
-            .collect();
-        assert!(body.v == expected, "body at frame {f}");
-        assert_eq!(body.groups[0].1.len(), c.body.mesh.triangles.len());
+    let pose = c.motion.at(0.0);
+    let body = read_obj(&out.join("body.obj"));
+    let expected: Vec<Vec3> = (c.body.mesh.positions.iter())
+        .map(|p| pose.rotation * *p + pose.translation)
+        .collect();
+    assert!(body.v == expected, "body at frame 0");
+    assert_eq!(body.groups[0].1.len(), c.body.mesh.triangles.len());
+    // Its motion: body.glb's node turns with it, a rotation key per written frame equal to
+    // the simulation's pose up to sign (q and −q are one rotation).
+    let all_times: Vec<f32> = written.iter().map(|&f| time(f)).collect();
+    let rotations = body_rotations(&out.join("body.glb"), &all_times);
+    for (r, f) in rotations.iter().zip(written) {
+        let pose = c.motion.at(time(f)).rotation;
+        let r = Quat::from_array(*r);
+        assert!(r.dot(pose).abs() > 1.0 - 1e-6, "frame {f}: {r} vs {pose}");
     }
-    // The control: it did turn (12.5° by frame 5), so a static body would fail the above.
-    let first = read_obj(&out.join("body_0000.obj")).v;
-    let moved = read_obj(&out.join("body_0005.obj")).v;
-    let most = first.iter().zip(&moved).map(|(a, b)| a.distance(*b));
-    assert!(most.fold(0.0, f32::max) > 0.01);
+    // The control: it did turn (12.5° by frame 5), so a still pose would fail the above.
+    assert!(c.motion.at(time(5)).rotation.angle_between(pose.rotation) > 0.1);
 
     // PC2: one sample per written frame, equal to the OBJ frame (both hold the f32 exactly).
     let (samples, start, rate, data) = read_pc2(&out.join("cloth.pc2"));
@@ -189,26 +196,52 @@ fn skirt_on_a_turning_body_exports_obj_body_pc2_and_glb() {
         assert!(data[k] == frame.v, "sample {k}");
     }
 
-    // glTF: parses and validates, and reproduces the OBJ frames.
-    let times: Vec<f32> = written.iter().map(|&f| time(f)).collect();
+    // glTF: five frames do not sew the skirt, so it holds the panels unwelded from the first
+    // simulated frame on (not the flat frame 0), and says so; it validates and reproduces the
+    // OBJ frames, with a material per panel.
+    let s: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert!(s["seams_closed_frame"].is_null());
+    assert!(s["warnings"]
+        .to_string()
+        .contains("garment.glb is not welded"));
     let glb = check_glb(
         &out.join("garment.glb"),
-        &frames,
+        &frames[1..],
         &prep.model.triangles,
-        &times,
+        &all_times[1..],
+        &garment.panel_names,
     );
     let uv = glb.uv.expect("pattern coordinates");
     for (t, g) in uv.iter().zip(&garment.uv) {
         assert_eq!(*t, [g.x, 1.0 - g.y], "v flipped to glTF's top-left origin");
     }
-    // The body node turns with the body: a rotation key per written frame, equal to the
-    // simulation's pose up to sign (q and −q are one rotation).
+    // The body node in the garment's file turns too, keyed at its frames.
     let rotations = glb.body_rotations.expect("an animated body");
-    assert_eq!(rotations.len(), written.len());
-    for (r, f) in rotations.iter().zip(written) {
-        let pose = c.motion.at(time(f)).rotation;
-        let r = Quat::from_array(*r);
-        assert!(r.dot(pose).abs() > 1.0 - 1e-6, "frame {f}: {r} vs {pose}");
+    assert_eq!(rotations.len(), written.len() - 1);
+}
+
+/// The rotation keys of `path`'s body node, keyed at `times`.
+fn body_rotations(path: &Path, times: &[f32]) -> Vec<[f32; 4]> {
+    khronos_validator(path);
+    use gltf::animation::util::{ReadOutputs, Rotations};
+    let gltf = gltf::Gltf::from_slice(&std::fs::read(path).unwrap()).expect("a valid glb");
+    let blob = gltf.blob.as_deref();
+    let body = gltf.nodes().find(|n| n.name() == Some("body")).unwrap();
+    assert_eq!(
+        body.mesh().unwrap().primitives().count(),
+        1,
+        "one body mesh"
+    );
+    let anim = gltf.animations().next().expect("an animation");
+    let channel = (anim.channels())
+        .find(|c| c.target().property() == gltf::animation::Property::Rotation)
+        .expect("a rotation channel");
+    let r = channel.reader(|_| blob);
+    assert_eq!(r.read_inputs().unwrap().collect::<Vec<_>>(), times);
+    match r.read_outputs() {
+        Some(ReadOutputs::Rotations(Rotations::F32(r))) => r.collect(),
+        _ => panic!("f32 rotations"),
     }
 }
 
@@ -241,6 +274,7 @@ fn a_grid_on_a_still_body_writes_one_body_and_a_cloth_group() {
         &frames,
         &prep.model.triangles,
         &times,
+        &["fabric".to_string()],
     );
     assert!(glb.uv.is_none());
     assert!(glb.body_rotations.is_none(), "a still body has no channels");
@@ -300,7 +334,13 @@ fn khronos_validator(path: &Path) {
     );
 }
 
-fn check_glb(path: &Path, frames: &[Obj], triangles: &[[u32; 3]], times: &[f32]) -> Glb {
+fn check_glb(
+    path: &Path,
+    frames: &[Obj],
+    triangles: &[[u32; 3]],
+    times: &[f32],
+    materials: &[String],
+) -> Glb {
     khronos_validator(path);
     use gltf::animation::util::{MorphTargetWeights, ReadOutputs, Rotations};
     let gltf = gltf::Gltf::from_slice(&std::fs::read(path).unwrap()).expect("a valid glb");
@@ -308,16 +348,25 @@ fn check_glb(path: &Path, frames: &[Obj], triangles: &[[u32; 3]], times: &[f32])
     let buffers = |_: gltf::Buffer| blob;
     let node = |name: &str| gltf.nodes().find(|n| n.name() == Some(name));
     let garment = node("garment").expect("a garment node");
-    let prim = garment.mesh().unwrap().primitives().next().unwrap();
-    let reader = prim.reader(buffers);
-    let base: Vec<Vec3> = reader.read_positions().unwrap().map(Vec3::from).collect();
-    assert!(base == frames[0].v, "the base mesh is the first frame");
-    assert_eq!(reader.read_normals().unwrap().count(), base.len());
-    let indices: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+    // One primitive and material per panel, in pattern order, sharing the vertices: their
+    // indices, one after the other, are the triangles in order (panels are contiguous).
+    let prims: Vec<gltf::Primitive> = garment.mesh().unwrap().primitives().collect();
+    let names: Vec<String> = (prims.iter())
+        .map(|p| p.material().name().unwrap().to_string())
+        .collect();
+    assert_eq!(names, materials);
+    let indices: Vec<u32> = (prims.iter())
+        .flat_map(|p| p.reader(buffers).read_indices().unwrap().into_u32())
+        .collect();
     assert_eq!(
         indices,
         triangles.iter().flatten().copied().collect::<Vec<_>>()
     );
+    let prim = &prims[0];
+    let reader = prim.reader(buffers);
+    let base: Vec<Vec3> = reader.read_positions().unwrap().map(Vec3::from).collect();
+    assert!(base == frames[0].v, "the base mesh is the first frame");
+    assert_eq!(reader.read_normals().unwrap().count(), base.len());
     let targets: Vec<Vec<Vec3>> = (reader.read_morph_targets())
         .map(|(p, _, _)| p.unwrap().map(Vec3::from).collect())
         .collect();
@@ -387,4 +436,129 @@ fn formats_pc2_alone_writes_the_cache_beside_a_rest_obj() {
     let both = text.replace("formats = [\"pc2\"]", "formats = [\"pc2\"]\ngltf = true");
     let e = Scene::parse(&both, &path).unwrap_err().to_string();
     assert!(e.contains("output.gltf"), "{e}");
+}
+
+#[test]
+fn a_sewn_garment_is_one_welded_mesh_in_the_gltf_from_its_first_sewn_frame() {
+    // The cotton T-shirt at 5 cm spacing (a 1 cm distance field): its seams close within
+    // 21 frames, written every 3rd.
+    let path = common::fixture("scenes/tshirt_drape_cotton.toml");
+    let mut scene = Scene::load(&path).unwrap();
+    if let drapekit::scene::ClothSource::Pattern { options, .. } = &mut scene.cloth {
+        options.particle_distance = 0.05;
+    }
+    scene.bodies[0].sdf_resolution = 0.01;
+    scene.output.every = 3;
+    scene.output.gltf = true;
+    assert!(scene.output.weld_seams, "on by default");
+    // The shipped gingham, one copy per 4 cm × 4 cm: the materials' base-colour texture.
+    let size_m = [0.04f32, 0.04];
+    scene.preview.texture = Some(drapekit::scene::TextureSetting {
+        path: common::fixture("textures/gingham.png"),
+        size_m,
+        pixels: (64, 64),
+    });
+    let out = out_dir("welded");
+    run_scene(&scene, &options(&out, 21)).unwrap();
+    let prep = prepare(&scene).unwrap();
+    let g = prep.garment.as_ref().unwrap();
+    let kept: Vec<u32> = (0..=7).map(|k| 3 * k).collect();
+    let frames: Vec<Obj> = (kept.iter())
+        .map(|f| read_obj(&out.join(format!("frame_{f:04}.obj"))))
+        .collect();
+    // The first written frame with every seam closed (the summary's rule), by the test's own
+    // reckoning from the OBJ frames.
+    let closed = |o: &Obj| {
+        let p: Vec<glam::Vec4> = o.v.iter().map(|v| v.extend(0.0)).collect();
+        let gaps = drapekit::metrics::seam_gaps(&g.seam_pairs, g.stitches, &p);
+        gaps.iter().all(|&gap| gap < prep.seam_closed_gap)
+    };
+    let start = frames.iter().position(closed).expect("the seams close");
+    assert!(
+        start > 0 && start + 2 <= frames.len(),
+        "sewn at frame {}",
+        kept[start]
+    );
+
+    // Welding: every seam pair's vertices become one; the garment is one connected mesh.
+    let weld = drapekit::pattern::weld::Weld::of_garment(g);
+    assert!(weld.len() < prep.model.len());
+    let mut parent: Vec<usize> = (0..weld.len()).collect();
+    fn root(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            i = p[i];
+        }
+        i
+    }
+    for t in &weld.triangles {
+        for k in 0..3 {
+            let (a, b) = (
+                root(&mut parent, t[k] as usize),
+                root(&mut parent, t[(k + 1) % 3] as usize),
+            );
+            parent[a] = b;
+        }
+    }
+    let pieces = (0..weld.len())
+        .filter(|&i| root(&mut parent, i) == i)
+        .count();
+    assert_eq!(pieces, 1, "one connected mesh");
+    // Seams closed means every pair within seam_closed_gap_m: a welded vertex (their mean)
+    // moves each particle by less than that.
+    for f in &frames[start..] {
+        assert!(weld.largest_shift(&f.v) < prep.seam_closed_gap);
+    }
+
+    // The glTF holds exactly that, from the first sewn frame: welded positions (the mean,
+    // rounded once to f32 in the file), the welded triangles by panel.
+    let welded: Vec<Obj> = (frames[start..].iter())
+        .map(|f| Obj {
+            v: weld.positions(&f.v),
+            ..Obj::default()
+        })
+        .collect();
+    let times: Vec<f32> = kept[start..]
+        .iter()
+        .map(|&f| f as f32 * prep.frame_dt)
+        .collect();
+    let glb = check_glb(
+        &out.join("garment.glb"),
+        &welded,
+        &weld.triangles,
+        &times,
+        &g.panel_names,
+    );
+    // Texture coordinates in copies of the image, its top towards each panel's +y (glTF's t
+    // runs down the image); the welded vertex takes its first particle's pattern point.
+    let uv = glb.uv.expect("texture coordinates");
+    for (t, p) in uv.iter().zip(weld.uv(&g.uv)) {
+        assert_eq!(*t, [p.x / size_m[0], -p.y / size_m[1]]);
+    }
+    let gltf = gltf::Gltf::from_slice(&std::fs::read(out.join("garment.glb")).unwrap()).unwrap();
+    let png = std::fs::read(common::fixture("textures/gingham.png")).unwrap();
+    let image = gltf.images().next().expect("the fabric image");
+    let gltf::image::Source::View { view, mime_type } = image.source() else {
+        panic!("embedded")
+    };
+    assert_eq!(mime_type, "image/png");
+    let blob = gltf.blob.as_deref().unwrap();
+    assert_eq!(
+        &blob[view.offset()..view.offset() + view.length()],
+        &png[..]
+    );
+    for m in gltf.materials().filter(|m| m.name() != Some("body")) {
+        let info = m
+            .pbr_metallic_roughness()
+            .base_color_texture()
+            .expect("textured");
+        assert_eq!(info.texture().source().index(), image.index());
+        assert_eq!(m.pbr_metallic_roughness().base_color_factor(), [1.0; 4]);
+    }
+    let s: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert!(
+        !s["warnings"].to_string().contains("not welded"),
+        "{}",
+        s["warnings"]
+    );
 }

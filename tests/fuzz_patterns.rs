@@ -342,6 +342,7 @@ fn exercise(text: &str, work: &Path) -> Result<i32, String> {
         frames: None,
         progress: false,
         checkpoint_every: None,
+        overwrite: false,
     };
     let result = run_scene(&scene, &opts);
     let summary = std::fs::read_to_string(out.join("summary.json")).unwrap_or_default();

@@ -2,6 +2,7 @@
 
 mod common;
 
+use drapekit::gpu::implicit::{Include, SolveKernel};
 use drapekit::gpu::kernels::{
     compose, compose_with, validate_wgsl, ForceInput, VbdEnergies, COMMON_WGSL,
 };
@@ -35,15 +36,19 @@ fn naga_validates_every_kernel_without_its_optional_sections() {
 }
 
 #[test]
-fn every_kernel_file_is_a_pass() {
-    // A kernel file without a Pass would never be validated or run.
+fn every_kernel_file_is_a_pass_or_a_solve_kernel() {
+    // A kernel file that no Pass, solve kernel or composition names would never be validated or
+    // run (the solve's kernels are validated in tests/implicit_gpu.rs).
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("kernels");
     for entry in std::fs::read_dir(dir).unwrap() {
         let name = entry.unwrap().file_name().into_string().unwrap();
         let stem = name.trim_end_matches(".wgsl");
         assert!(
-            stem == "common" || Pass::ALL.iter().any(|p| p.name() == stem),
-            "kernels/{name} has no Pass"
+            ["common", "solve"].contains(&stem)
+                || Pass::ALL.iter().any(|p| p.name() == stem)
+                || SolveKernel::ALL.iter().any(|k| k.file() == stem)
+                || Include::ALL.iter().any(|i| i.file() == stem),
+            "kernels/{name} is not a Pass, a solve kernel or an include"
         );
     }
 }

@@ -16,12 +16,14 @@ use drapekit::solver::Solver;
 use glam::DVec2;
 use std::path::Path;
 
-const SHIPPED: [&str; 5] = [
+const SHIPPED: [&str; 7] = [
     "skirt_2panel.json",
     "tshirt.json",
     "circle_skirt.json",
     "skirt_mannequin.json",
+    "skirt_mannequin_woven.json",
     "tshirt_apose.json",
+    "tshirt_apose_woven.json",
 ];
 
 fn load(name: &str) -> Pattern {

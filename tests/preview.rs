@@ -233,7 +233,8 @@ fn a_run_writes_previews_every_n_frames_and_an_animation() {
     std::fs::create_dir_all(&dir).unwrap();
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, text).unwrap();
-    // A frame left by an earlier, longer run in the same folder is not this run's.
+    // A frame left by an earlier, longer run in the same folder is not this run's: the run is
+    // refused without --overwrite (tests/run_folder.rs), and with it the frame goes.
     std::fs::create_dir_all(dir.join("run")).unwrap();
     std::fs::write(dir.join("run/frame_0099.obj"), "v 0 0 0\n").unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_drapekit"))
@@ -248,6 +249,7 @@ fn a_run_writes_previews_every_n_frames_and_an_animation() {
         .args([
             "--adapter",
             "fallback",
+            "--overwrite",
             "--out",
             dir.join("run").to_str().unwrap(),
         ])
@@ -259,6 +261,7 @@ fn a_run_writes_previews_every_n_frames_and_an_animation() {
         String::from_utf8_lossy(&out.stderr)
     );
     let run = dir.join("run");
+    assert!(!run.join("frame_0099.obj").exists());
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(run.join("summary.json")).unwrap()).unwrap();
     let outputs: Vec<&str> = (summary["outputs"].as_array().unwrap().iter())

@@ -61,6 +61,8 @@ fn strain_colours_of_a_stretched_sheet_follow_the_colour_map() {
         legend: false,
         colors: Vec::new(),
         checker: 0.0,
+        occlusion: false,
+        texture: None,
     };
     let pixels = previewer.image(Some(1), &look, None).unwrap();
     // The sheet spans x in [-0.525, 0.575] at y 1.0..1.6; sample well inside each half.
@@ -273,6 +275,8 @@ fn fabric_mode_colours_each_panel_and_lays_a_checker_over_the_pattern() {
         legend: true,
         colors: Vec::new(),
         checker: 0.1,
+        occlusion: false,
+        texture: None,
     };
     let pixels = previewer.image(None, &look, None).unwrap();
     let camera = CameraPreset::Front.framing(

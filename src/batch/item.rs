@@ -199,6 +199,8 @@ fn attempt(item: &Item, tmp: &Path, opts: &ItemOptions) -> Result<(), Failure> {
         progress: false,
         // An item is short; a killed batch redoes the item in flight (see "Batches").
         checkpoint_every: None,
+        // A fresh folder per attempt: nothing to replace.
+        overwrite: false,
     };
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         run_scene(&item.scene, &run_opts)

@@ -15,7 +15,9 @@ use crate::atomic_file::write_atomic;
 use crate::cpu::CpuSolver;
 use crate::error::{Error, InputError};
 use crate::mesh::Charted;
-use crate::plan::{newton_correction, Pass, SolveOp, SolveShape};
+use crate::plan::{
+    newton_correction, newton_correction_block_jacobi, Pass, SolveOp, SolveShape, LINEAR_ITERATIONS,
+};
 use crate::plot::{log_log_svg, Series};
 use crate::scene::{ClothSource, Scene, INTEGRATOR_IMPLICIT};
 use crate::sim::{phase_params, prepare, simulate, substep_params, Prepared, RunStats};
@@ -50,7 +52,7 @@ pub struct ConvergenceRow {
     pub refinement: u32,
     /// Particles.
     pub particles: usize,
-    /// "vbd" or "newton-multigrid".
+    /// "vbd", "newton-multigrid" or "newton-block-jacobi".
     pub method: &'static str,
     /// Sweeps (vbd) or Newton steps run so far.
     pub iterations: u32,
@@ -276,23 +278,33 @@ fn measure(
             .into_iter()
             .map(|(k, s, r)| row("vbd", k, s, sweep, r)),
     );
-    // Newton steps, each after its sweeps.
-    fresh(&mut solver)?;
-    let mut correction = vec![SolveOp::Sweep { iteration: 0 }; shape.smoothing as usize];
-    correction.extend(newton_correction(shape));
-    let mut seconds = 0.0;
-    for k in 1..=opts.max_newton {
-        seconds += run_ops(&mut solver, &correction, &step);
-        rows.push(row(
-            "newton-multigrid",
-            k,
-            seconds,
-            sweep,
-            residual(&mut solver, &step),
-        ));
+    // Newton steps, each after its sweeps: preconditioned by the V-cycle, and by the block
+    // diagonal alone (the single-level alternative).
+    let methods = [
+        ("newton-multigrid", newton_correction(shape)),
+        (
+            "newton-block-jacobi",
+            newton_correction_block_jacobi(BLOCK_JACOBI_ITERATIONS),
+        ),
+    ];
+    for (method, ops) in methods {
+        fresh(&mut solver)?;
+        let mut correction = vec![SolveOp::Sweep { iteration: 0 }; shape.smoothing as usize];
+        correction.extend(ops);
+        let mut seconds = 0.0;
+        for k in 1..=opts.max_newton {
+            seconds += run_ops(&mut solver, &correction, &step);
+            let r = residual(&mut solver, &step);
+            rows.push(row(method, k, seconds, sweep, r));
+        }
     }
     Ok(rows)
 }
+
+/// Conjugate-gradient iterations per Newton step with the block-Jacobi preconditioner: a
+/// one-level preconditioner needs iterations in proportion to the cloth's width in particles to
+/// carry load across it (64: the 2 cm T-shirt is about 30 rings from shoulder to hem).
+pub const BLOCK_JACOBI_ITERATIONS: u32 = 64;
 
 /// Runs `ops` on the solver's implicit solve and returns their wall time.
 fn run_ops(
@@ -355,16 +367,33 @@ pub fn reduction_per_step(rows: &[ConvergenceRow], refinement: u32, steps: u32) 
     Some((last.residual_rms as f64 / first.residual_rms as f64).powf(1.0 / steps as f64))
 }
 
+/// The options that repeat this measurement, as `drapekit bench convergence` takes them.
+fn command_options(opts: &ConvergenceOptions) -> String {
+    let list = |v: &[u32]| v.iter().map(u32::to_string).collect::<Vec<_>>().join(",");
+    let mut s = format!(
+        " --refinements {} --max-sweeps {} --max-newton {} --relax-frames {}",
+        list(&opts.refinements),
+        opts.max_sweeps,
+        opts.max_newton,
+        opts.relax_frames
+    );
+    if let Some(f) = opts.frames {
+        s += &format!(" --frames {f}");
+    }
+    s
+}
+
 fn report(opts: &ConvergenceOptions, rows: &[ConvergenceRow], frame: u32) -> String {
     let mut md = format!(
         "# Convergence of implicit Euler's solve\n\n\
-         `drapekit bench convergence {} --out {}`: the substep after frame {frame}, from the \
+         `drapekit bench convergence {} --out {}{}`: the substep after frame {frame}, from the \
          same state, on the CPU ({}). Cost in fine-sweep equivalents (wall time over one Vertex \
          Block Descent sweep of the same mesh); residual |f|/(m·g) over the free particles.\n\n\
-         | spacing ÷ | particles | VBD to RMS 0.1 | Newton to RMS 0.1 | VBD to RMS 0.01 | Newton to RMS 0.01 | Newton's RMS reduction per step (first 4) |\n\
-         |---|---|---|---|---|---|---|\n",
+         | spacing ÷ | particles | VBD to RMS 0.1 | Newton to RMS 0.1 | VBD to RMS 0.01 | Newton to RMS 0.01 | Newton, block Jacobi, to RMS 0.01 | Newton's RMS reduction per step (first 4) |\n\
+         |---|---|---|---|---|---|---|---|\n",
         opts.scene.display(),
         opts.out.display(),
+        command_options(opts),
         cpu_threads_description(),
     );
     let cell = |c: Option<f64>| c.map_or("not reached".to_string(), |v| format!("{v:.0}"));
@@ -374,17 +403,21 @@ fn report(opts: &ConvergenceOptions, rows: &[ConvergenceRow], frame: u32) -> Str
             .find(|x| x.refinement == r)
             .map_or(0, |x| x.particles);
         md += &format!(
-            "| {r} | {particles} | {} | {} | {} | {} | {} |\n",
+            "| {r} | {particles} | {} | {} | {} | {} | {} | {} |\n",
             cell(cost_to(rows, r, "vbd", 0.1)),
             cell(cost_to(rows, r, "newton-multigrid", 0.1)),
             cell(cost_to(rows, r, "vbd", 0.01)),
             cell(cost_to(rows, r, "newton-multigrid", 0.01)),
+            cell(cost_to(rows, r, "newton-block-jacobi", 0.01)),
             reduction_per_step(rows, r, 4).map_or("-".into(), |v| format!("{v:.2}")),
         );
     }
     md += &format!(
-        "\nVBD ran at most {} sweeps; Newton at most {} steps. The full curves are in \
-         convergence.csv and convergence.svg.\n",
+        "\nVBD ran at most {} sweeps; Newton at most {} steps, each with {LINEAR_ITERATIONS} \
+         conjugate-gradient iterations preconditioned by a multigrid V-cycle, or with \
+         {BLOCK_JACOBI_ITERATIONS} \
+         preconditioned by the block diagonal. The full curves are in convergence.csv and \
+         convergence.svg.\n",
         opts.max_sweeps, opts.max_newton
     );
     md

@@ -16,6 +16,7 @@ pub mod rig;
 pub mod sdf;
 pub mod shapes;
 pub mod simplify;
+pub mod size;
 pub mod skin;
 
 use crate::error::InputError;

@@ -164,16 +164,17 @@ struct FabricArgs {
     /// The presets to test (default: all).
     #[arg(long, value_delimiter = ',')]
     presets: Vec<String>,
-    /// The specimens' integrator: symplectic (converges to the resting shape) or implicit
-    /// (Vertex Block Descent: at a few sweeps per step it does not; see docs/src/benchmarks/fabric.md).
+    /// The specimens' integrator: symplectic (converges to the resting shape at its stable step)
+    /// or implicit (Newton steps at large steps; see docs/src/benchmarks/fabric.md).
     #[arg(long, default_value = "symplectic", value_parser = ["symplectic", "implicit"])]
     integrator: String,
     /// Substeps per frame (default: the stability estimate for symplectic, 4 for implicit).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     substeps: Option<u32>,
-    /// Implicit sweeps per substep.
-    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..))]
-    iterations: u32,
+    /// Implicit iterations per substep: Newton steps where the specimen has coarse levels,
+    /// sweeps where it has none (default: the scene's default, 1 Newton step or 10 sweeps).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    iterations: Option<u32>,
     /// The most frames a specimen may take to settle (default 480; 96 with --quick).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     max_frames: Option<u32>,

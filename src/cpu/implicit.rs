@@ -11,7 +11,7 @@ use super::line_energy::{apply_correction, line_energy, line_search};
 use super::pcg::{pcg_direction, pcg_matvec, pcg_start, pcg_step, PcgScalars};
 use super::prolong::{correction_filter, prolong};
 use super::restrict::restrict;
-use super::smooth::{level_residual, smooth};
+use super::smooth::{block_jacobi, level_residual, smooth};
 use super::vbd_solve::vbd_solve;
 use crate::model::layout::{
     Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep, WORKGROUP_SIZE,
@@ -367,6 +367,10 @@ impl Newton {
                     false => colours.iter().for_each(|rows| run(rows)),
                     true => colours.iter().rev().for_each(|rows| run(rows)),
                 }
+            }
+            SolveOp::BlockJacobi => {
+                let l0 = &mut self.levels[0];
+                block_jacobi(&mg.fine, &l0.blocks, &l0.rhs, &mut l0.e);
             }
             SolveOp::Residual { level: l } => {
                 let a = &mut self.levels[l as usize];

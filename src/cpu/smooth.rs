@@ -35,6 +35,15 @@ pub fn smooth(pattern: &BlockPattern, blocks: &[Mat3], rows: &[u32], rhs: &[Vec4
     }
 }
 
+/// Block-Jacobi preconditioning: each row's e = D⁻¹·rhs with D its diagonal block (the first
+/// of the row). Rows run in parallel.
+pub fn block_jacobi(pattern: &BlockPattern, blocks: &[Mat3], rhs: &[Vec4], e: &mut [Vec4]) {
+    e.par_iter_mut().enumerate().for_each(|(r, e)| {
+        let diagonal = blocks[pattern.offsets[r] as usize];
+        *e = solve3(diagonal, rhs[r].truncate()).extend(0.0);
+    });
+}
+
 /// Below this many rows a colour is swept on one thread: splitting it costs more than it
 /// saves.
 const PARALLEL_ROWS: usize = 512;

@@ -68,10 +68,19 @@ pub fn estimate(scene: &Scene, prep: &Prepared, from: u32) -> OutputEstimate {
                 body.triangles.len() as u64,
                 false,
             );
-            if c.moves() {
+            if c.deformed.is_some() {
+                // A deforming body is written at every frame (body_NNNN.obj): no node
+                // animation holds its shape.
                 per_frame += bytes;
-            } else {
-                once += bytes;
+                continue;
+            }
+            // One OBJ either way; a moving body's motion goes to body.glb: its mesh once
+            // (positions and normals, 24 bytes a vertex; 12 a triangle) and a time, a rotation
+            // and a translation (32 bytes) a written frame.
+            once += bytes;
+            if c.motion.moves() {
+                once += 24 * body.positions.len() as u64 + 12 * body.triangles.len() as u64;
+                per_frame += 32;
             }
         }
     }
@@ -117,6 +126,11 @@ fn free_bytes_of(dir: &Path) -> Option<u64> {
     // SAFETY: `path` is a NUL-terminated string and `stat` a writable statvfs; the call only
     // fills `stat`.
     if unsafe { libc::statvfs(path.as_ptr(), &mut stat) } != 0 {
+        return None;
+    }
+    // Pseudo filesystems (sysfs, procfs) report no blocks at all: they have no capacity to
+    // compare with, and whether they take files at all is the write's to say.
+    if stat.f_blocks == 0 {
         return None;
     }
     Some((stat.f_bavail as u64).saturating_mul(stat.f_frsize as u64))

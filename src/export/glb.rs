@@ -1,9 +1,10 @@
-//! The animated glTF binary (`.glb`): the cloth's first written frame as the base mesh, one
-//! morph target per later frame (position and normal deltas), a weights animation that moves
-//! through them, and each body as a further node, posed or moved rigidly by its own channels.
+//! The animated glTF binary (`.glb`): the cloth's first exported frame as the base mesh (one
+//! primitive and material per panel, sharing the vertices), one morph target per later frame
+//! (position and normal deltas), a weights animation that moves through them, and each body as
+//! a further node over one mesh, posed or moved rigidly by its own channels.
 
 use super::obj::unit_normals;
-use crate::preview::{BODY, FABRIC};
+use crate::preview::BODY;
 use animation::Property::{MorphTargetWeights as Weights, Rotation, Translation};
 use glam::{Quat, Vec2, Vec3, Vec4};
 use gltf_json as json;
@@ -14,7 +15,7 @@ use std::collections::BTreeMap;
 /// The cloth over time.
 #[derive(Clone, Copy, Debug)]
 pub struct ClothTrack<'a> {
-    /// Triangles over the particles.
+    /// Triangles over the vertices.
     pub triangles: &'a [[u32; 3]],
     /// Pattern coordinates in m, for pattern scenes.
     pub uv: Option<&'a [Vec2]>,
@@ -22,6 +23,30 @@ pub struct ClothTrack<'a> {
     pub times: &'a [f32],
     /// Each frame's positions in m (world).
     pub frames: &'a [Vec<Vec3>],
+    /// The materials, one per panel (one for a cloth without panels).
+    pub materials: &'a [ClothMaterial],
+    /// Each triangle's material (`None`: all the first).
+    pub triangle_material: Option<&'a [u32]>,
+    /// An image of the fabric laid over the pattern coordinates, every material's base colour.
+    pub texture: Option<&'a FabricImage>,
+}
+
+/// A panel's material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClothMaterial {
+    /// The panel's name.
+    pub name: String,
+    /// Its colour, linear RGB.
+    pub color: Vec3,
+}
+
+/// A fabric image: the PNG file's bytes, and the physical size one copy covers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FabricImage {
+    /// The PNG file, as read.
+    pub png: Vec<u8>,
+    /// Width and height of one copy on the fabric, in m.
+    pub size_m: [f32; 2],
 }
 
 /// A body: its mesh in its own frame and its rigid pose at each of the cloth's times (one pose
@@ -38,37 +63,34 @@ pub struct BodyTrack<'a> {
     pub poses: Vec<(Quat, Vec3)>,
 }
 
-/// The `.glb` bytes, or `None` without frames, with frames of unequal length or times that do
-/// not match them, or past the format's 4 GiB.
-pub fn glb_bytes(cloth: &ClothTrack, bodies: &[BodyTrack]) -> Option<Vec<u8>> {
-    let base = cloth.frames.first()?;
-    let n = base.len();
-    if cloth.times.len() != cloth.frames.len() || cloth.frames.iter().any(|f| f.len() != n) {
+/// The `.glb` bytes of the cloth (if any) and the bodies over `times`, or `None` without
+/// times, with frames of unequal length or times that do not match them, or past the format's
+/// 4 GiB.
+pub fn glb_bytes(
+    cloth: Option<&ClothTrack>,
+    bodies: &[BodyTrack],
+    times: &[f32],
+) -> Option<Vec<u8>> {
+    if times.is_empty() {
         return None;
     }
     let mut b = Builder::default();
     b.root.asset.generator = Some(format!("drapekit {}", env!("CARGO_PKG_VERSION")));
-    let garment = b.cloth_mesh(cloth);
-    let mut nodes = vec![b.root.push(json::Node {
-        mesh: Some(garment),
-        name: Some("garment".into()),
-        ..node()
-    })];
+    let mut nodes = Vec::new();
     let mut channels = Vec::new();
     let mut samplers = Vec::new();
-    let later = cloth.frames.len() - 1;
-    if later > 0 {
-        // Frame 0 is the base (all weights 0); frame k sets target k − 1 to 1. Linear
-        // interpolation between neighbours blends two frames' positions linearly. Dense weights
-        // take 4·frames² bytes, less than the targets' 24·particles·frames until frames pass
-        // six times the particle count.
-        let mut weights = vec![0.0f32; cloth.frames.len() * later];
-        for k in 1..cloth.frames.len() {
-            weights[k * later + k - 1] = 1.0;
+    if let Some(cloth) = cloth {
+        let n = cloth.frames.first()?.len();
+        if cloth.times != times || cloth.frames.iter().any(|f| f.len() != n) {
+            return None;
         }
-        let input = b.scalars(cloth.times, true);
-        let output = b.scalars(&weights, false);
-        channels.push(b.channel(&mut samplers, input, output, nodes[0], Weights));
+        let garment = b.cloth_mesh(cloth)?;
+        nodes.push(b.root.push(json::Node {
+            mesh: Some(garment),
+            name: Some("garment".into()),
+            ..node()
+        }));
+        b.cloth_weights(cloth, nodes[0], &mut channels, &mut samplers);
     }
     for body in bodies {
         let (rotation, translation) = *body.poses.first()?;
@@ -82,7 +104,7 @@ pub fn glb_bytes(cloth: &ClothTrack, bodies: &[BodyTrack]) -> Option<Vec<u8>> {
         });
         nodes.push(node);
         if body.poses.len() > 1 {
-            if body.poses.len() != cloth.times.len() {
+            if body.poses.len() != times.len() {
                 return None;
             }
             // glTF slerps between neighbouring keys: keep each quaternion on the same side as
@@ -93,7 +115,7 @@ pub fn glb_bytes(cloth: &ClothTrack, bodies: &[BodyTrack]) -> Option<Vec<u8>> {
                     rotations[k] = -rotations[k];
                 }
             }
-            let input = b.scalars(cloth.times, true);
+            let input = b.scalars(times, true);
             let flat: Vec<f32> = rotations.iter().flat_map(|q| q.to_array()).collect();
             let r = b.accessor(&flat, rotations.len(), accessor::Type::Vec4, None, None);
             let t: Vec<Vec3> = body.poses.iter().map(|p| p.1).collect();
@@ -119,6 +141,34 @@ pub fn glb_bytes(cloth: &ClothTrack, bodies: &[BodyTrack]) -> Option<Vec<u8>> {
     });
     b.root.scene = Some(scene);
     b.finish()
+}
+
+impl Builder {
+    /// The weights animation of the cloth's morph targets.
+    fn cloth_weights(
+        &mut self,
+        cloth: &ClothTrack,
+        node: Index<json::Node>,
+        channels: &mut Vec<animation::Channel>,
+        samplers: &mut Vec<animation::Sampler>,
+    ) {
+        let b = self;
+        let later = cloth.frames.len() - 1;
+        if later == 0 {
+            return;
+        }
+        // Frame 0 is the base (all weights 0); frame k sets target k − 1 to 1. Linear
+        // interpolation between neighbours blends two frames' positions linearly. Dense weights
+        // take 4·frames² bytes, less than the targets' 24·particles·frames until frames pass
+        // six times the particle count.
+        let mut weights = vec![0.0f32; cloth.frames.len() * later];
+        for k in 1..cloth.frames.len() {
+            weights[k * later + k - 1] = 1.0;
+        }
+        let input = b.scalars(cloth.times, true);
+        let output = b.scalars(&weights, false);
+        channels.push(b.channel(samplers, input, output, node, Weights));
+    }
 }
 
 /// A node with nothing set.
@@ -147,8 +197,9 @@ struct Builder {
 }
 
 impl Builder {
-    /// The cloth mesh: base frame, normals, pattern UVs, indices and the morph targets.
-    fn cloth_mesh(&mut self, cloth: &ClothTrack) -> Index<json::Mesh> {
+    /// The cloth mesh: base frame, normals, pattern UVs and the morph targets, shared by one
+    /// primitive per material (`None` when a triangle names a material that does not exist).
+    fn cloth_mesh(&mut self, cloth: &ClothTrack) -> Option<Index<json::Mesh>> {
         let base = &cloth.frames[0];
         let base_normals = unit_normals(base, cloth.triangles);
         let mut attributes = BTreeMap::new();
@@ -158,10 +209,17 @@ impl Builder {
         attributes.insert(Valid(mesh::Semantic::Positions), positions);
         attributes.insert(Valid(mesh::Semantic::Normals), normals);
         if let Some(uv) = cloth.uv.filter(|uv| uv.len() == base.len()) {
-            // glTF's texture origin is the top left, OBJ's the bottom left: v' = 1 − v keeps
-            // an image where the OBJ's vt put it.
-            let flipped: Vec<f32> = uv.iter().flat_map(|t| [t.x, 1.0 - t.y]).collect();
-            let uv = self.accessor(&flipped, uv.len(), accessor::Type::Vec2, None, vertex);
+            let flat: Vec<f32> = match cloth.texture {
+                // In copies of the image, its top row towards the panel's +y (glTF's t grows
+                // down the image).
+                Some(t) => (uv.iter())
+                    .flat_map(|p| [p.x / t.size_m[0], -p.y / t.size_m[1]])
+                    .collect(),
+                // In m. glTF's texture origin is the top left, OBJ's the bottom left:
+                // v' = 1 − v keeps an image where the OBJ's vt put it.
+                None => uv.iter().flat_map(|t| [t.x, 1.0 - t.y]).collect(),
+            };
+            let uv = self.accessor(&flat, uv.len(), accessor::Type::Vec2, None, vertex);
             attributes.insert(Valid(mesh::Semantic::TexCoords(0)), uv);
         }
         let targets: Vec<mesh::MorphTarget> = (cloth.frames[1..].iter())
@@ -178,13 +236,67 @@ impl Builder {
                 }
             })
             .collect();
-        let material = self.material("fabric", FABRIC.extend(1.0), true);
-        let indices = self.indices(cloth.triangles);
+        let texture = cloth.texture.map(|t| self.texture(&t.png));
+        let mut by_material = vec![Vec::new(); cloth.materials.len()];
+        for (k, t) in cloth.triangles.iter().enumerate() {
+            let m = cloth.triangle_material.map_or(0, |m| m[k]) as usize;
+            by_material.get_mut(m)?.push(*t);
+        }
+        let mut primitives = Vec::new();
+        for (m, triangles) in cloth.materials.iter().zip(&by_material) {
+            if triangles.is_empty() {
+                continue;
+            }
+            // A texture carries the colour; the factor multiplies it.
+            let color = if texture.is_some() {
+                Vec3::ONE
+            } else {
+                m.color
+            };
+            let material = self.material(&m.name, color.extend(1.0), true, texture);
+            let indices = self.indices(triangles);
+            primitives.push(primitive(
+                attributes.clone(),
+                indices,
+                material,
+                targets.clone(),
+            ));
+        }
         let count = targets.len();
-        self.root.push(json::Mesh {
+        Some(self.root.push(json::Mesh {
             name: Some("garment".into()),
-            primitives: vec![primitive(attributes, indices, material, targets)],
+            primitives,
             weights: (count > 0).then(|| vec![0.0; count]),
+            extensions: None,
+            extras: Default::default(),
+        }))
+    }
+
+    /// The fabric image as an embedded PNG, repeated over the texture coordinates.
+    fn texture(&mut self, png: &[u8]) -> Index<json::Texture> {
+        let view = self.view(png, None);
+        let image = self.root.push(json::Image {
+            buffer_view: Some(view),
+            mime_type: Some(json::image::MimeType("image/png".into())),
+            name: Some("fabric".into()),
+            uri: None,
+            extensions: None,
+            extras: Default::default(),
+        });
+        use json::texture::{MagFilter, MinFilter, WrappingMode};
+        let sampler = self.root.push(json::texture::Sampler {
+            mag_filter: Some(Valid(MagFilter::Linear)),
+            min_filter: Some(Valid(MinFilter::LinearMipmapLinear)),
+            name: None,
+            wrap_s: Valid(WrappingMode::Repeat),
+            wrap_t: Valid(WrappingMode::Repeat),
+            extensions: None,
+            extras: Default::default(),
+        });
+        self.root.push(json::Texture {
+            name: Some("fabric".into()),
+            sampler: Some(sampler),
+            source: image,
             extensions: None,
             extras: Default::default(),
         })
@@ -199,7 +311,7 @@ impl Builder {
         let normals = self.vec3s(&normals, false, target);
         attributes.insert(Valid(mesh::Semantic::Positions), positions);
         attributes.insert(Valid(mesh::Semantic::Normals), normals);
-        let material = self.material("body", BODY.extend(1.0), false);
+        let material = self.material("body", BODY.extend(1.0), false, None);
         let indices = self.indices(body.triangles);
         self.root.push(json::Mesh {
             name: Some(body.name.clone()),
@@ -210,14 +322,26 @@ impl Builder {
         })
     }
 
-    /// A matte material; cloth is seen from both sides.
-    fn material(&mut self, name: &str, color: Vec4, two_sided: bool) -> Index<json::Material> {
+    /// A matte material, optionally with a base-colour texture; cloth is seen from both sides.
+    fn material(
+        &mut self,
+        name: &str,
+        color: Vec4,
+        two_sided: bool,
+        texture: Option<Index<json::Texture>>,
+    ) -> Index<json::Material> {
         let mut m = json::Material {
             name: Some(name.into()),
             double_sided: two_sided,
             ..Default::default()
         };
         m.pbr_metallic_roughness.base_color_factor = material::PbrBaseColorFactor(color.to_array());
+        m.pbr_metallic_roughness.base_color_texture = texture.map(|index| json::texture::Info {
+            index,
+            tex_coord: 0,
+            extensions: None,
+            extras: Default::default(),
+        });
         m.pbr_metallic_roughness.metallic_factor = material::StrengthFactor(0.0);
         m.pbr_metallic_roughness.roughness_factor = material::StrengthFactor(0.9);
         self.root.push(m)

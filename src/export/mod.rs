@@ -1,6 +1,8 @@
 //! What a run writes of its frames: an OBJ per written frame (smooth normals, a group per
-//! panel), the body beside them, a PC2 point cache and an animated glTF binary. The last two
-//! need every written frame, so they are kept in memory and written at the end.
+//! panel), the bodies beside them (one mesh each; a moving body's motion as a node animation in
+//! `body.glb`), a PC2 point cache and an animated glTF binary (a sewn garment welded into one
+//! mesh). The caches need every written frame, so they are kept in memory and written at the
+//! end.
 
 pub mod disk;
 pub mod glb;
@@ -10,7 +12,8 @@ pub mod pc2;
 use crate::atomic_file::write_atomic;
 use crate::body::Collider;
 use crate::error::Error;
-use crate::scene::OutputSettings;
+use crate::pattern::garment::Garment;
+use crate::scene::{OutputSettings, Scene, TextureSetting};
 use crate::sim::Prepared;
 use glam::{Vec2, Vec3, Vec4};
 use obj::Group;
@@ -22,6 +25,8 @@ pub const PC2_FILE: &str = "cloth.pc2";
 pub const GLB_FILE: &str = "garment.glb";
 /// The rest-pose OBJ beside the point cache: the first written frame, in particle order.
 pub const REST_FILE: &str = "rest.obj";
+/// The moving bodies' glTF binary: each body's mesh once, its motion as a node animation.
+pub const BODY_GLB_FILE: &str = "body.glb";
 
 /// Writes a run's frames as they come and its caches at the end.
 pub struct Exporter<'a> {
@@ -32,6 +37,13 @@ pub struct Exporter<'a> {
     uv: Option<&'a [Vec2]>,
     groups: Vec<Group>,
     bodies: &'a [std::sync::Arc<Collider>],
+    garment: Option<&'a Garment>,
+    seam_closed_gap: f32,
+    /// The glTF's materials, one per panel (one for other cloth).
+    materials: Vec<glb::ClothMaterial>,
+    texture: Option<TextureSetting>,
+    /// What the glTF binary could not do as asked (weld a garment whose seams stayed open).
+    pub warnings: Vec<String>,
     /// The written frames' numbers and positions, kept for the PC2 and glTF files.
     kept_frames: Vec<u32>,
     kept: Vec<Vec<Vec3>>,
@@ -39,9 +51,27 @@ pub struct Exporter<'a> {
 }
 
 impl<'a> Exporter<'a> {
-    /// An exporter of `prep`'s cloth and body into `dir`, as `output` asks.
-    pub fn new(prep: &'a Prepared, output: &OutputSettings, dir: &Path) -> Self {
+    /// An exporter of `prep`'s cloth and body into `dir`, as `scene`'s `[output]` asks, in
+    /// its preview colours.
+    pub fn new(prep: &'a Prepared, scene: &Scene, dir: &Path) -> Self {
+        let output = &scene.output;
         let triangles = &prep.model.triangles[..];
+        let color = |k: usize| match scene.preview.colors.len() {
+            0 => crate::preview::fabric_color(&scene.fabric),
+            n => scene.preview.colors[k % n],
+        };
+        let materials = match &prep.garment {
+            Some(g) => (g.panel_names.iter().enumerate())
+                .map(|(k, name)| glb::ClothMaterial {
+                    name: name.clone(),
+                    color: color(k),
+                })
+                .collect(),
+            None => vec![glb::ClothMaterial {
+                name: "fabric".into(),
+                color: color(0),
+            }],
+        };
         let groups = match &prep.garment {
             Some(g) => obj::panel_groups(&g.panel_names, &g.triangle_panel),
             None => vec![Group {
@@ -57,6 +87,11 @@ impl<'a> Exporter<'a> {
             uv: prep.garment.as_ref().map(|g| &g.uv[..]),
             groups,
             bodies: &prep.model.colliders,
+            garment: prep.garment.as_ref(),
+            seam_closed_gap: prep.seam_closed_gap,
+            materials,
+            texture: scene.preview.texture.clone(),
+            warnings: Vec::new(),
             kept_frames: Vec::new(),
             kept: Vec::new(),
             written: 0,
@@ -82,9 +117,12 @@ impl<'a> Exporter<'a> {
             let text = obj::cloth_obj(&positions, self.triangles, self.uv, &self.groups);
             self.write(&name, text.as_bytes())?;
             names.push(name);
+            // A rigid body once, at the first written frame's pose: a moving one's motion is
+            // body.glb's node animation. A deforming body at every frame: no node animation
+            // holds its shape.
             for (i, c) in self.bodies.iter().enumerate() {
                 let stem = self.body_name(i);
-                let name = if c.moves() {
+                let name = if c.deformed.is_some() {
                     Some(format!("{stem}_{frame:04}.obj"))
                 } else {
                     (self.written == 0).then(|| format!("{stem}.obj"))
@@ -126,9 +164,9 @@ impl<'a> Exporter<'a> {
         Ok(vec![name])
     }
 
-    /// Writes the point cache and the glTF binary of the frames seen so far (also after a run
-    /// that stopped early) and returns their names.
-    pub fn finish(&self) -> Result<Vec<String>, Error> {
+    /// Writes the point cache and the glTF binaries of the frames seen so far (also after a
+    /// run that stopped early) and returns their names.
+    pub fn finish(&mut self) -> Result<Vec<String>, Error> {
         let mut names = Vec::new();
         if self.kept.is_empty() {
             return Ok(names);
@@ -142,38 +180,109 @@ impl<'a> Exporter<'a> {
             self.write(PC2_FILE, &bytes)?;
             names.push(PC2_FILE.to_string());
         }
+        let times: Vec<f32> = (self.kept_frames.iter())
+            .map(|&f| f as f32 * self.frame_dt)
+            .collect();
+        if self.bodies.iter().any(|c| c.motion.moves()) {
+            let bodies = self.body_tracks(&times);
+            let bytes = glb::glb_bytes(None, &bodies, &times)
+                .ok_or_else(|| self.too_large(BODY_GLB_FILE))?;
+            self.write(BODY_GLB_FILE, &bytes)?;
+            names.push(BODY_GLB_FILE.to_string());
+        }
         if self.settings.gltf {
-            let times: Vec<f32> = (self.kept_frames.iter())
-                .map(|&f| f as f32 * self.frame_dt)
-                .collect();
-            let cloth = glb::ClothTrack {
-                triangles: self.triangles,
-                uv: self.uv,
-                times: &times,
-                frames: &self.kept,
-            };
-            let bodies: Vec<glb::BodyTrack> = (self.bodies.iter().enumerate())
-                .map(|(i, c)| glb::BodyTrack {
-                    name: self.body_name(i),
-                    positions: &c.body.mesh.positions,
-                    triangles: &c.body.mesh.triangles,
-                    poses: if c.motion.moves() {
-                        let pose = |t: f32| c.motion.at(t);
-                        times
-                            .iter()
-                            .map(|&t| (pose(t).rotation, pose(t).translation))
-                            .collect()
-                    } else {
-                        let still = c.motion.at(0.0);
-                        vec![(still.rotation, still.translation)]
-                    },
-                })
-                .collect();
-            let bytes = glb::glb_bytes(&cloth, &bodies).ok_or_else(|| self.too_large(GLB_FILE))?;
+            let bytes = self.garment_glb(&times)?;
             self.write(GLB_FILE, &bytes)?;
             names.push(GLB_FILE.to_string());
         }
         Ok(names)
+    }
+
+    /// Which kept frames the glTF binary starts from, and whether it welds the garment. A sewn
+    /// garment starts at the first frame with every seam closed (the seams' drawing-together
+    /// in zero gravity is how the garment is built, not how it moves), welded when
+    /// `weld_seams`; one whose seams never closed starts at its first simulated frame, unwelded,
+    /// with a warning. Other cloth starts at its first frame.
+    fn gltf_start(&mut self) -> (usize, bool) {
+        let Some(g) = self.garment else {
+            return (0, false);
+        };
+        let closed = |frame: &Vec<Vec3>| {
+            let p: Vec<Vec4> = frame.iter().map(|v| v.extend(0.0)).collect();
+            let gaps = crate::metrics::seam_gaps(&g.seam_pairs, g.stitches, &p);
+            gaps.iter().all(|&gap| gap < self.seam_closed_gap)
+        };
+        if let Some(k) = self.kept.iter().position(closed) {
+            return (k, self.settings.weld_seams);
+        }
+        if self.settings.weld_seams && g.stitches > 0 {
+            self.warnings.push(format!(
+                "{GLB_FILE} is not welded: the garment's seams never all closed, so it holds the \
+                 separate panels from the first simulated frame on"
+            ));
+        }
+        let simulated = self.kept_frames.iter().position(|&f| f > 0);
+        (simulated.unwrap_or(0), false)
+    }
+
+    /// The glTF binary of the kept frames from `gltf_start` on, with the bodies.
+    fn garment_glb(&mut self, all_times: &[f32]) -> Result<Vec<u8>, Error> {
+        let (start, weld) = self.gltf_start();
+        let times = &all_times[start..];
+        let frames = &self.kept[start..];
+        let welded = weld
+            .then(|| crate::pattern::weld::Weld::of_garment(self.garment.expect("weld needs one")));
+        let (frames, triangles, uv) = match &welded {
+            Some(w) => (
+                frames.iter().map(|f| w.positions(f)).collect(),
+                w.triangles.clone(),
+                self.uv.map(|uv| w.uv(uv)),
+            ),
+            None => (
+                frames.to_vec(),
+                self.triangles.to_vec(),
+                self.uv.map(<[Vec2]>::to_vec),
+            ),
+        };
+        let texture = match &self.texture {
+            Some(t) => Some(glb::FabricImage {
+                png: std::fs::read(&t.path).map_err(|e| Error::io(&t.path, e))?,
+                size_m: t.size_m,
+            }),
+            None => None,
+        };
+        let cloth = glb::ClothTrack {
+            triangles: &triangles,
+            uv: uv.as_deref(),
+            times,
+            frames: &frames,
+            materials: &self.materials,
+            triangle_material: self.garment.map(|g| &g.triangle_panel[..]),
+            texture: texture.as_ref(),
+        };
+        let bodies = self.body_tracks(times);
+        glb::glb_bytes(Some(&cloth), &bodies, times).ok_or_else(|| self.too_large(GLB_FILE))
+    }
+
+    /// Every body's mesh and its poses at `times` (one pose when it never moves).
+    fn body_tracks(&self, times: &[f32]) -> Vec<glb::BodyTrack<'a>> {
+        (self.bodies.iter().enumerate())
+            .map(|(i, c)| glb::BodyTrack {
+                name: self.body_name(i),
+                positions: &c.body.mesh.positions,
+                triangles: &c.body.mesh.triangles,
+                poses: if c.motion.moves() {
+                    let pose = |t: f32| c.motion.at(t);
+                    times
+                        .iter()
+                        .map(|&t| (pose(t).rotation, pose(t).translation))
+                        .collect()
+                } else {
+                    let still = c.motion.at(0.0);
+                    vec![(still.rotation, still.translation)]
+                },
+            })
+            .collect()
     }
 
     /// The frames kept for the caches and how many frames were written: what a checkpoint

@@ -120,6 +120,10 @@ pub fn adapters() -> AdapterList {
     }
 }
 
+/// The most storage buffers one kernel of implicit Euler's solve binds (`assemble` and
+/// `pcg_step`; `ImplicitSolve::new` checks every kernel against the device's limit).
+pub const SOLVE_STORAGE_BUFFERS: u32 = 8;
+
 /// A device and queue on a chosen adapter. Cheap to clone (wgpu handles are shared).
 #[derive(Clone, Debug)]
 pub struct GpuContext {
@@ -181,10 +185,17 @@ impl GpuContext {
         };
         let info = adapter.get_info();
         let available = adapter.limits();
-        // Kernels bind only uniforms, sampled textures and write-only storage textures, all
-        // within the downlevel defaults; larger textures let larger meshes fit (see texels.rs).
+        // Kernels bind uniforms, sampled textures, write-only storage textures and storage
+        // buffers. Implicit Euler's solve binds up to SOLVE_STORAGE_BUFFERS storage buffers per
+        // kernel (more than the downlevel defaults' 4) and its largest arrays (the multigrid
+        // hierarchy, the blocks of every level's matrix) grow with the mesh, as do textures:
+        // ask for what the adapter gives there (the solver checks what it needs against it).
         let required_limits = wgpu::Limits {
             max_texture_dimension_2d: available.max_texture_dimension_2d,
+            max_storage_buffers_per_shader_stage: SOLVE_STORAGE_BUFFERS
+                .min(available.max_storage_buffers_per_shader_stage),
+            max_storage_buffer_binding_size: available.max_storage_buffer_binding_size,
+            max_buffer_size: available.max_buffer_size,
             ..wgpu::Limits::downlevel_defaults()
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {

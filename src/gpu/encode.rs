@@ -12,7 +12,9 @@ impl GpuSolver {
     pub fn run_passes(&mut self, passes: &[Pass], steps: &[SubstepParams]) -> Result<(), Error> {
         self.ctx.check()?;
         let capacity = self.substeps.as_ref().map_or(usize::MAX, |s| s.capacity);
-        for batch in steps.chunks(capacity.min(steps.len().max(1))) {
+        let batches = steps.chunks(capacity.min(steps.len().max(1)));
+        let last_batch = batches.len().saturating_sub(1);
+        for (b, batch) in batches.enumerate() {
             if let Some(sb) = &self.substeps {
                 let mut bytes = vec![0u8; sb.stride as usize * batch.len()];
                 for (k, step) in batch.iter().enumerate() {
@@ -29,14 +31,29 @@ impl GpuSolver {
                     timestamp_writes: None,
                 });
                 for k in 0..batch.len() {
+                    let substep_offset = self
+                        .substeps
+                        .as_ref()
+                        .map(|sb| (k as u64 * sb.stride) as u32);
                     for &pass in passes {
+                        if pass == Pass::VbdSolve {
+                            let solve = self
+                                .implicit
+                                .as_ref()
+                                .ok_or_else(|| Error::Gpu("vbd_solve is not in the plan".into()))?;
+                            let offset = substep_offset.expect("the solve has substep params");
+                            // The final force residual is read at the call's end only.
+                            let measured = b == last_batch && k + 1 == batch.len();
+                            solve.encode(&mut cpass, self.current, offset, measured);
+                            continue;
+                        }
                         let stage =
                             self.stages.iter().find(|s| s.pass == pass).ok_or_else(|| {
                                 Error::Gpu(format!("{} is not in the plan", pass.name()))
                             })?;
                         cpass.set_pipeline(&stage.pipeline);
-                        let offset = match (&self.substeps, stage.uses_substep) {
-                            (Some(sb), true) => vec![(k as u64 * sb.stride) as u32],
+                        let offset = match (substep_offset, stage.uses_substep) {
+                            (Some(o), true) => vec![o],
                             _ => vec![],
                         };
                         if let Some(force_in) = &stage.force_in {
@@ -46,17 +63,8 @@ impl GpuSolver {
                             self.last_forces = out;
                         }
                         for _ in 0..stage.repeats {
-                            if stage.sweeps.is_empty() {
-                                cpass.set_bind_group(0, &stage.bind_groups[self.current], &offset);
-                                cpass.dispatch_workgroups(stage.dispatch.0, stage.dispatch.1, 1);
-                            }
-                            // vbd_solve: one dispatch per colour per iteration, in sweep order.
-                            for &(sweep_offset, (gx, gy)) in &stage.sweeps {
-                                let mut offsets = offset.clone();
-                                offsets.push(sweep_offset);
-                                cpass.set_bind_group(0, &stage.bind_groups[self.current], &offsets);
-                                cpass.dispatch_workgroups(gx, gy, 1);
-                            }
+                            cpass.set_bind_group(0, &stage.bind_groups[self.current], &offset);
+                            cpass.dispatch_workgroups(stage.dispatch.0, stage.dispatch.1, 1);
                             if pass.writes_state() {
                                 self.current = 1 - self.current;
                             }

@@ -1,5 +1,6 @@
 //! Kernel composition (`common.wgsl` prepended to each stage) and naga validation.
 
+use super::implicit::SolveKernel;
 use crate::plan::Pass;
 
 /// The shared structs and helpers.
@@ -74,24 +75,36 @@ pub fn compose(pass: Pass, input: ForceInput) -> String {
 }
 
 /// `compose`, keeping only the sections of the energies in `energies`. Dropped lines become
-/// empty lines, so line numbers in errors still match the stage file.
+/// empty lines, so line numbers in errors still match the stage file. `vbd_solve` is a kernel
+/// of implicit Euler's solve, composed with the solve's shared files (`SolveKernel::compose`).
 pub fn compose_with(pass: Pass, input: ForceInput, energies: VbdEnergies) -> String {
+    if pass == Pass::VbdSolve {
+        return SolveKernel::Sweep.compose(energies).source;
+    }
     let tail = if pass.reads_forces() {
         input.wgsl()
     } else {
         ""
     };
+    let enabled = |name: &str| match name {
+        "bending" => energies.bending,
+        "seams" => energies.seams,
+        "body" => energies.body,
+        _ => true,
+    };
+    let body = keep_sections(pass.kernel_source(), enabled);
+    format!("{COMMON_WGSL}\n{body}\n{tail}")
+}
+
+/// `source` with its optional sections resolved: a `// section NAME` … `// else NAME` …
+/// `// end NAME` block keeps the section when `enabled(NAME)` and the `else` part when not.
+/// Dropped lines (and the markers) become empty lines, so line numbers stay those of the file.
+pub fn keep_sections(source: &str, enabled: impl Fn(&str) -> bool) -> String {
     let mut body = String::new();
     // None: outside any section; Some(keep): inside a section or its else part.
     let mut keep: Option<bool> = None;
-    for line in pass.kernel_source().lines() {
+    for line in source.lines() {
         let t = line.trim();
-        let enabled = |name: &str| match name {
-            "bending" => energies.bending,
-            "seams" => energies.seams,
-            "body" => energies.body,
-            _ => true,
-        };
         let marker = if let Some(name) = t.strip_prefix("// section ") {
             keep = Some(enabled(name));
             true
@@ -109,7 +122,64 @@ pub fn compose_with(pass: Pass, input: ForceInput, energies: VbdEnergies) -> Str
         }
         body.push('\n');
     }
-    format!("{COMMON_WGSL}\n{body}\n{tail}")
+    body
+}
+
+/// A WGSL module composed of several files, one after another, remembering where each starts
+/// so that an error can name the file and line it comes from.
+#[derive(Clone, Debug, Default)]
+pub struct Composed {
+    /// The module's source.
+    pub source: String,
+    /// Each file's name (in `kernels/`, without `.wgsl`) and its first line in `source`
+    /// (1-based).
+    pub files: Vec<(&'static str, usize)>,
+}
+
+impl Composed {
+    /// Appends a file's text.
+    pub fn push(&mut self, file: &'static str, text: String) {
+        self.files.push((file, self.source.lines().count() + 1));
+        self.source.push_str(&text);
+        if !text.ends_with('\n') {
+            self.source.push('\n');
+        }
+    }
+
+    /// The file and its line (1-based) of the module's line `line`.
+    pub fn locate(&self, line: usize) -> (&'static str, usize) {
+        let (file, first) = (self.files.iter())
+            .rev()
+            .find(|(_, first)| *first <= line)
+            .copied()
+            .unwrap_or(("?", 1));
+        (file, line - first + 1)
+    }
+
+    /// Validates the module with naga; an error names `kernels/FILE.wgsl:LINE:COLUMN` of the
+    /// file the offending line comes from.
+    pub fn validate(&self, label: &str) -> Result<naga::Module, String> {
+        validate_wgsl(label, &self.source).map_err(|report| {
+            let prefix = format!("{label}:");
+            let mut out = String::new();
+            let mut rest = report.as_str();
+            while let Some(at) = rest.find(&prefix) {
+                out.push_str(&rest[..at]);
+                let after = &rest[at + prefix.len()..];
+                let digits = after.bytes().take_while(u8::is_ascii_digit).count();
+                match after[..digits].parse::<usize>() {
+                    Ok(line) => {
+                        let (file, local) = self.locate(line);
+                        out.push_str(&format!("kernels/{file}.wgsl:{local}"));
+                    }
+                    Err(_) => out.push_str(&prefix),
+                }
+                rest = &after[digits..];
+            }
+            out.push_str(rest);
+            format!("{label}\n{out}")
+        })
+    }
 }
 
 /// Parses and validates a WGSL source with naga; errors come formatted with line and caret.

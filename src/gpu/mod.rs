@@ -3,6 +3,7 @@
 mod context;
 mod elements;
 mod encode;
+pub mod implicit;
 pub mod kernels;
 mod pipelines;
 mod readback;

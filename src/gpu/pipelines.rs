@@ -3,7 +3,7 @@
 
 use super::context::GpuContext;
 use super::texels::TexelArray;
-use crate::model::layout::{SubstepParams, Sweep};
+use crate::model::layout::SubstepParams;
 use crate::plan::Pass;
 use std::num::NonZeroU64;
 
@@ -13,8 +13,8 @@ pub(super) enum Binding<'a> {
     Uniform(&'a wgpu::Buffer),
     /// One `SubstepParams` at a dynamic offset.
     SubstepUniform(&'a wgpu::Buffer),
-    /// One `Sweep` at a dynamic offset.
-    SweepUniform(&'a wgpu::Buffer),
+    /// One entry of this many bytes at a dynamic offset.
+    Dynamic(&'a wgpu::Buffer, u64),
     /// An unused binding number (an optional kernel section that was left out).
     Gap,
     /// Read with textureLoad.
@@ -35,8 +35,6 @@ pub(super) struct Stage {
     /// The force texture this stage writes.
     pub(super) force_out: Option<usize>,
     pub(super) uses_substep: bool,
-    /// `vbd_solve` only: one (sweep uniform offset, workgroups) per dispatch of a substep.
-    pub(super) sweeps: Vec<(u32, (u32, u32))>,
     /// Dispatches per substep of a ping-pong stage (`strain_limit`'s Jacobi iterations); 1
     /// otherwise.
     pub(super) repeats: u32,
@@ -47,7 +45,7 @@ pub(super) struct Stage {
 /// Bytes of one entry of a dynamic uniform array.
 fn dynamic_size(b: &Binding) -> u64 {
     match b {
-        Binding::SweepUniform(_) => std::mem::size_of::<Sweep>() as u64,
+        Binding::Dynamic(_, size) => *size,
         _ => std::mem::size_of::<SubstepParams>() as u64,
     }
 }
@@ -60,7 +58,7 @@ fn layout_entry(binding: u32, b: &Binding) -> wgpu::BindGroupLayoutEntry {
             has_dynamic_offset: false,
             min_binding_size: None,
         },
-        Binding::SubstepUniform(_) | Binding::SweepUniform(_) => wgpu::BindingType::Buffer {
+        Binding::SubstepUniform(_) | Binding::Dynamic(..) => wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Uniform,
             has_dynamic_offset: true,
             min_binding_size: NonZeroU64::new(dynamic_size(b)),
@@ -97,7 +95,7 @@ fn group_entry<'a>(binding: u32, b: &Binding<'a>) -> wgpu::BindGroupEntry<'a> {
     let resource = match *b {
         Binding::Uniform(buffer) => buffer.as_entire_binding(),
         // The dynamic binding covers one entry; the offset selects which.
-        Binding::SubstepUniform(buffer) | Binding::SweepUniform(buffer) => {
+        Binding::SubstepUniform(buffer) | Binding::Dynamic(buffer, _) => {
             wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                 buffer,
                 offset: 0,
@@ -111,24 +109,39 @@ fn group_entry<'a>(binding: u32, b: &Binding<'a>) -> wgpu::BindGroupEntry<'a> {
     wgpu::BindGroupEntry { binding, resource }
 }
 
-/// A layout and one bind group per binding list (all lists have the same shape).
+/// A layout and one bind group per binding list (all lists have the same shape); each list's
+/// bindings are numbered by their position in it.
 fn bind_groups<const K: usize>(
     device: &wgpu::Device,
     label: &str,
     lists: [&[Binding]; K],
 ) -> (wgpu::BindGroupLayout, [wgpu::BindGroup; K]) {
-    let entries: Vec<_> = (lists[0].iter().enumerate())
+    let numbered = lists.map(|list| {
+        (list.iter().enumerate())
+            .map(|(i, b)| (i as u32, *b))
+            .collect::<Vec<_>>()
+    });
+    numbered_bind_groups(device, label, numbered.each_ref().map(|l| &l[..]))
+}
+
+/// `bind_groups` with each binding's number given beside it.
+pub(super) fn numbered_bind_groups<const K: usize>(
+    device: &wgpu::Device,
+    label: &str,
+    lists: [&[(u32, Binding)]; K],
+) -> (wgpu::BindGroupLayout, [wgpu::BindGroup; K]) {
+    let entries: Vec<_> = (lists[0].iter())
         .filter(|(_, b)| !matches!(b, Binding::Gap))
-        .map(|(i, b)| layout_entry(i as u32, b))
+        .map(|(i, b)| layout_entry(*i, b))
         .collect();
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some(label),
         entries: &entries,
     });
     let groups = lists.map(|list| {
-        let entries: Vec<_> = (list.iter().enumerate())
+        let entries: Vec<_> = (list.iter())
             .filter(|(_, b)| !matches!(b, Binding::Gap))
-            .map(|(i, b)| group_entry(i as u32, b))
+            .map(|(i, b)| group_entry(*i, b))
             .collect();
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(label),
@@ -153,27 +166,11 @@ pub(super) fn build_stage(
     let device = &ctx.device;
     let (layout0, groups) = bind_groups(device, pass.name(), state_bindings);
     let force_in = force_in.map(|b| bind_groups(device, "force_in", [b]));
-    let mut layouts = vec![Some(&layout0)];
+    let mut layouts = vec![&layout0];
     if let Some((layout1, _)) = &force_in {
-        layouts.push(Some(layout1));
+        layouts.push(layout1);
     }
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(pass.name()),
-        bind_group_layouts: &layouts,
-        immediate_size: 0,
-    });
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(pass.name()),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(pass.name()),
-        layout: Some(&layout),
-        module: &module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    let pipeline = compute_pipeline(device, pass.name(), source, "main", &layouts);
     Stage {
         pass,
         pipeline,
@@ -184,7 +181,35 @@ pub(super) fn build_stage(
         uses_substep: state_bindings[0]
             .iter()
             .any(|b| matches!(b, Binding::SubstepUniform(_))),
-        sweeps: Vec::new(),
         repeats: 1,
     }
+}
+
+/// The compute pipeline of entry point `entry` of the WGSL `source`, over bind groups of
+/// `layouts` (group 0 first).
+pub(super) fn compute_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    source: String,
+    entry: &str,
+    layouts: &[&wgpu::BindGroupLayout],
+) -> wgpu::ComputePipeline {
+    let layouts: Vec<_> = layouts.iter().map(|l| Some(*l)).collect();
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &layouts,
+        immediate_size: 0,
+    });
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(label),
+        layout: Some(&layout),
+        module: &module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
 }

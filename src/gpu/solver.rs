@@ -8,17 +8,18 @@
 
 use super::context::GpuContext;
 use super::elements::{element_arrays, stage_elements};
+use super::implicit::{ImplicitSolve, Shared, SolveOptions};
 use super::kernels::{compose_with, ForceInput, VbdEnergies};
 use super::pipelines::{build_stage, Binding, Stage};
 use super::texels::TexelArray;
 use crate::error::Error;
-use crate::model::layout::{SimParams, SubstepParams, Sweep, WORKGROUP_SIZE};
+use crate::model::layout::{SimParams, SubstepParams, WORKGROUP_SIZE};
 use crate::model::ClothModel;
 use crate::plan::{HingeEvaluation, Pass, PassPlan};
 use crate::solver::{AdapterReport, ParticleState, Solver};
 use glam::Vec4;
 use wgpu::util::DeviceExt;
-use wgpu::TextureFormat::{R32Uint, Rgba32Float};
+use wgpu::TextureFormat::Rgba32Float;
 
 /// The self-collision spatial hash on the GPU.
 pub(super) struct HashBuffers {
@@ -33,21 +34,6 @@ pub(super) struct SubstepBuffer {
     pub(super) buffer: wgpu::Buffer,
     pub(super) stride: u64,
     pub(super) capacity: usize,
-}
-
-/// Implicit Euler's buffers: the iterate, the inertial target, the largest Newton step of each
-/// iteration (then the count of iterations run), and the sweep table (one `Sweep` per dispatch
-/// at a uniform-offset stride).
-pub(super) struct VbdBuffers {
-    pub(super) x: wgpu::Buffer,
-    pub(super) y: wgpu::Buffer,
-    pub(super) steps: wgpu::Buffer,
-    /// The count of iterations run when last reported (it wraps at 2³²).
-    pub(super) iterations_reported: u32,
-    pub(super) sweep_buffer: wgpu::Buffer,
-    pub(super) sweep_stride: u64,
-    pub(super) sweeps: Vec<Sweep>,
-    pub(super) order: Vec<u32>,
 }
 
 /// The wgpu backend. Creates textures, buffers and pipelines only for the stages in its plan.
@@ -74,7 +60,10 @@ pub struct GpuSolver {
     pub(super) stages: Vec<Stage>,
     pub(super) resource_labels: Vec<&'static str>,
     pub(super) hash: Option<HashBuffers>,
-    pub(super) vbd: Option<VbdBuffers>,
+    /// Implicit Euler's solve, when the plan steps by it.
+    pub(super) implicit: Option<ImplicitSolve>,
+    /// The plan's stages in order (`vbd_solve` has no stage of its own: `implicit` runs it).
+    pub(super) passes: Vec<Pass>,
     /// The `monitor` stage's per-workgroup partials (two `vec4<u32>` each).
     pub(super) health: wgpu::Buffer,
 }
@@ -119,6 +108,19 @@ impl GpuSolver {
         params: SimParams,
         plan: &PassPlan,
         max_batch: usize,
+    ) -> Result<Self, Error> {
+        let options = SolveOptions::for_adapter(ctx);
+        Self::with_options(ctx, model, params, plan, max_batch, options)
+    }
+
+    /// `new`, with the implicit solve's level operations run as `options` says.
+    pub fn with_options(
+        ctx: &GpuContext,
+        model: &ClothModel,
+        params: SimParams,
+        plan: &PassPlan,
+        max_batch: usize,
+        options: SolveOptions,
     ) -> Result<Self, Error> {
         let plan = &plan.for_backend(Self::HINGES);
         let n = model.len();
@@ -232,50 +234,22 @@ impl GpuSolver {
                 sorted: buffer("hash_sorted", n as u64),
             }
         });
-        let vbd = plan.contains(Pass::VbdSolve).then(|| {
-            let coloring = model.vertex_coloring();
-            let sweeps = coloring.sweeps(params.iterations);
-            let mut storage = |label: &'static str, bytes: u64| {
-                labels.push(label);
-                ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(label),
-                    size: bytes.max(16),
-                    usage: wgpu::BufferUsages::STORAGE
-                        | wgpu::BufferUsages::COPY_SRC
-                        | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                })
-            };
-            let x = storage("vbd_x", 16 * n as u64);
-            let y = storage("vbd_y", 16 * n as u64);
-            let steps = storage("vbd_steps", 4 * (params.iterations as u64 + 1));
-
-            labels.push("vbd_sweeps");
-            let align = ctx.device.limits().min_uniform_buffer_offset_alignment as u64;
-            let stride = (std::mem::size_of::<Sweep>() as u64).next_multiple_of(align);
-            let mut bytes = vec![0u8; (stride as usize * sweeps.len()).max(stride as usize)];
-            for (k, s) in sweeps.iter().enumerate() {
-                let at = k * stride as usize;
-                bytes[at..at + std::mem::size_of::<Sweep>()].copy_from_slice(bytemuck::bytes_of(s));
+        let implicit = match plan.contains(Pass::VbdSolve) {
+            true => {
+                let shared = Shared {
+                    ctx,
+                    params: &params_buf,
+                    substeps: &substeps
+                        .as_ref()
+                        .expect("the solve has substep params")
+                        .buffer,
+                    pos: &pos,
+                    labels: &mut labels,
+                };
+                Some(ImplicitSolve::new(shared, model, &params, plan, options)?)
             }
-            let sweep_buffer = ctx
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("vbd_sweeps"),
-                    contents: &bytes,
-                    usage: wgpu::BufferUsages::UNIFORM,
-                });
-            VbdBuffers {
-                x,
-                y,
-                steps,
-                iterations_reported: 0,
-                sweep_buffer,
-                sweep_stride: stride,
-                sweeps,
-                order: coloring.order,
-            }
-        });
+            false => None,
+        };
         let energies = VbdEnergies {
             bending: !model.hinges.is_empty(),
             seams: !model.seams.is_empty(),
@@ -302,6 +276,9 @@ impl GpuSolver {
         let mut force_index = 0;
         // The substep plan, then the per-frame monitor.
         for &pass in plan.passes.iter().chain(&[Pass::Monitor]) {
+            if pass == Pass::VbdSolve {
+                continue;
+            }
             // integrate's bending section gathers what hinge_forces wrote.
             let energies = match pass {
                 Pass::Integrate => VbdEnergies {
@@ -319,10 +296,6 @@ impl GpuSolver {
                 owned.push(TexelArray::with_data(ctx, label, format, bytes, none)?);
                 Ok(())
             };
-            if pass == Pass::VbdSolve {
-                let v = vbd.as_ref().expect("vbd buffers");
-                add("vbd_order", R32Uint, bytemuck::cast_slice(&v.order))?;
-            }
             for kind in stage_elements(pass, energies) {
                 for (label, format, bytes) in element_arrays(model, kind) {
                     add(label, format, &bytes)?;
@@ -340,7 +313,7 @@ impl GpuSolver {
             };
             // The forces integrate reads: the last force stage's output (zero if none ran).
             let summed = (force_stages + 1) % 2 % forces.len().max(1);
-            let vb = || vbd.as_ref().expect("vbd buffers");
+            let vb = || &implicit.as_ref().expect("the implicit solve").buffers;
             let substep_buf = substeps.as_ref().map(|s| &s.buffer);
             let hb = || hash.as_ref().expect("self-collision buffers");
             let bindings = |p: usize| -> Vec<Binding> {
@@ -439,41 +412,16 @@ impl GpuSolver {
                         Binding::Uniform(&params_buf),
                         Binding::Read(&pos[p]),
                         Binding::Read(&vel[p]),
-                        Binding::Storage(&vb().x, false),
-                        Binding::Storage(&vb().y, false),
+                        Binding::Storage(&vb().disp, false),
+                        Binding::Storage(&vb().target, false),
                         Binding::Storage(&vb().steps, false),
+                        Binding::Storage(&vb().control, false),
                     ],
-                    Pass::VbdSolve => {
-                        let mut list = vec![
-                            Binding::Uniform(&params_buf),
-                            Binding::SubstepUniform(substep_buf.expect("vbd needs substep params")),
-                            Binding::SweepUniform(&vb().sweep_buffer),
-                            Binding::Read(&pos[p]),
-                            Binding::Storage(&vb().x, false),
-                            Binding::Storage(&vb().y, true),
-                            Binding::Storage(&vb().steps, false),
-                            o(0),
-                            o(1),
-                            o(2),
-                        ];
-                        let mut next = 3;
-                        let sections = [
-                            (energies.bending, 3),
-                            (energies.seams, 3),
-                            (energies.body, 1),
-                        ];
-                        for (on, count) in sections {
-                            for _ in 0..count {
-                                list.push(if on { o(next) } else { Binding::Gap });
-                                next += on as usize;
-                            }
-                        }
-                        list
-                    }
+                    Pass::VbdSolve => unreachable!("the implicit solve has no stage"),
                     Pass::VbdFinish => vec![
                         Binding::Uniform(&params_buf),
                         Binding::Read(&pos[p]),
-                        Binding::Storage(&vb().x, true),
+                        Binding::Storage(&vb().disp, true),
                         Binding::Write(&pos[1 - p]),
                         Binding::Write(&vel[1 - p]),
                     ],
@@ -532,12 +480,6 @@ impl GpuSolver {
                 force_out,
                 dispatch,
             );
-            if pass == Pass::VbdSolve {
-                let v = vb();
-                stage.sweeps = (v.sweeps.iter().enumerate())
-                    .map(|(k, s)| ((k as u64 * v.sweep_stride) as u32, dispatch_for(s.count)))
-                    .collect();
-            }
             if pass == Pass::StrainLimit {
                 stage.repeats = params.strain_iterations;
             }
@@ -564,14 +506,30 @@ impl GpuSolver {
             stages,
             resource_labels: labels,
             hash,
-            vbd,
+            implicit,
+            passes: plan.passes.clone(),
             health,
         })
     }
 
-    /// The stages that have a pipeline, in order.
+    /// The stages that have pipelines, in order (`monitor` last).
     pub fn pipeline_passes(&self) -> Vec<Pass> {
-        self.stages.iter().map(|s| s.pass).collect()
+        let mut passes = self.passes.clone();
+        passes.push(Pass::Monitor);
+        passes
+    }
+
+    /// Dispatches encoded per substep: one per stage, a Jacobi stage's iterations, and the
+    /// implicit solve's.
+    pub fn dispatches_per_substep(&self) -> usize {
+        (self.passes.iter())
+            .map(|&p| match p {
+                Pass::VbdSolve => self.implicit.as_ref().map_or(0, |s| s.dispatches()),
+                _ => (self.stages.iter())
+                    .find(|s| s.pass == p)
+                    .map_or(0, |s| s.repeats as usize),
+            })
+            .sum()
     }
 
     /// Labels of every buffer and texture this solver created.
@@ -622,20 +580,24 @@ impl Solver for GpuSolver {
     }
 
     fn residual(&mut self) -> Result<Option<crate::solver::SolveProgress>, Error> {
-        let Some(v) = &self.vbd else {
+        let Some(solve) = &self.implicit else {
             return Ok(None);
         };
-        let words = self.read_u32(&v.steps)?;
+        let words = self.read_u32(&solve.buffers.steps)?;
+        let control = self.solve_control()?;
+        let newton_run = self.solve_scalars()?.newton_steps;
         let (steps, count) = words.split_at(words.len() - 1);
         let steps: Vec<f32> = steps.iter().map(|&w| f32::from_bits(w)).collect();
-        let v = self.vbd.as_mut().expect("checked above");
-        let iterations = count[0].wrapping_sub(v.iterations_reported);
-        v.iterations_reported = count[0];
+        let solve = self.implicit.as_mut().expect("checked above");
+        let sweeps = count[0].wrapping_sub(solve.sweeps_reported);
+        solve.sweeps_reported = count[0];
+        let newton_steps = newton_run.wrapping_sub(solve.newton_reported);
+        solve.newton_reported = newton_run;
         Ok(Some(crate::solver::SolveProgress {
             relative_residual: crate::solver::relative_residual(&steps),
-            force_residual: (0.0, 0.0),
-            newton_steps: 0,
-            iterations: iterations as u64,
+            force_residual: (control.residual_max, control.residual_rms),
+            newton_steps: newton_steps as u64,
+            iterations: sweeps as u64,
         }))
     }
 

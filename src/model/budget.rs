@@ -300,7 +300,10 @@ pub fn check_sdf_textures(scene: &Scene, max_texels: u64) -> Result<(), InputErr
             "the bodies' SDFs have {total} nodes together, above this adapter's {max_texels} \
              (its largest 2D texture holds them all)"
         ),
-        format!("use sdf_resolution_m = {suggested:.4} or coarser, or run with --backend cpu"),
+        format!(
+            "{}use sdf_resolution_m = {suggested:.4} or coarser, or run with --backend cpu",
+            super::collider::unit_hint(&super::build_body(b, &c, &scene.body_table(i))?, b)
+        ),
     ))
 }
 

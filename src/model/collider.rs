@@ -49,6 +49,19 @@ pub fn build_body(settings: &BodySettings, c: &Checker, table: &str) -> Result<B
     })
 }
 
+/// "if the mesh was modelled in cm, …; otherwise " when a mesh body's size suggests a wrong
+/// `units`, else nothing: an SDF too large for memory is the first thing such a body meets.
+pub(crate) fn unit_hint(body: &Body, settings: &BodySettings) -> String {
+    let BodySource::Mesh { scale, .. } = &settings.source else {
+        return String::new();
+    };
+    let extent = crate::body::size::largest_extent(&body.mesh.positions);
+    match crate::body::size::size_problem(extent, *scale) {
+        Some((problem, fix)) => format!("{problem}; {fix}. Otherwise "),
+        None => String::new(),
+    }
+}
+
 /// Loads the body (table `table` of the scene), bakes (or reads) its SDF under the memory cap,
 /// and builds the collider.
 pub(crate) fn build_collider(
@@ -72,7 +85,10 @@ pub(crate) fn build_collider(
                 bytes as f64 / 1048576.0,
                 settings.sdf_max_bytes as f64 / 1048576.0
             ),
-            format!("use sdf_resolution_m = {suggested:.4} or coarser, or raise sdf_max_mb"),
+            format!(
+                "{}use sdf_resolution_m = {suggested:.4} or coarser, or raise sdf_max_mb",
+                unit_hint(&body, settings)
+            ),
         ));
     }
     let cache = settings.sdf_cache.then(cache_dir).flatten();

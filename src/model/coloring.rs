@@ -143,6 +143,7 @@ mod tests {
             stretch_stiffness: 100.0,
             bending_stiffness: Some(1e-5),
             damping_ratio: 0.05,
+            preset: None,
         };
         let model = ClothModel::from_mesh(&mesh, &fabric, &[]);
         let coloring = model.vertex_coloring();

@@ -60,7 +60,7 @@ fn grid_levels(width: f32, height: f32, columns: u32, rows: u32) -> (Charted, Ve
     let mut levels = Vec::new();
     let (mut c, mut r) = (columns, rows);
     while (c * r) as usize > COARSEST_PARTICLES && c.min(r) > 3 {
-        (c, r) = ((c + 1) / 2, (r + 1) / 2);
+        (c, r) = (c.div_ceil(2), r.div_ceil(2));
         levels.push(Charted::grid(width, height, c.max(2), r.max(2)));
     }
     (fine, levels)

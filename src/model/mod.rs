@@ -133,6 +133,7 @@ impl ClothModel {
     ///     stretch_stiffness: 500.0,
     ///     bending_stiffness: Some(1e-5),
     ///     damping_ratio: 0.05,
+    ///     preset: None,
     /// };
     /// let model = ClothModel::from_mesh(&mesh, &fabric, &[0]);
     /// assert_eq!(model.len(), 121);
@@ -439,6 +440,7 @@ mod tests {
             stretch_stiffness: 100.0,
             bending_stiffness: None,
             damping_ratio: 0.0,
+            preset: None,
         };
         let model = ClothModel::from_mesh(&mesh, &fabric, &[]);
         let energy: f64 = model

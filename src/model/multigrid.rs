@@ -292,6 +292,7 @@ mod tests {
             stretch_stiffness: 100.0,
             bending_stiffness: Some(1e-5),
             damping_ratio: 0.05,
+            preset: None,
         };
         let model = ClothModel::from_mesh(&mesh, &fabric, &[]);
         (model, Charted::grid(1.0, 1.0, columns, columns))
@@ -343,7 +344,7 @@ mod tests {
                 }
             }
         }
-        for ci in 0..n {
+        for (ci, row) in dense.iter_mut().enumerate().take(n) {
             for b in level.pattern.offsets[ci]..level.pattern.offsets[ci + 1] {
                 let cj = level.pattern.columns[b as usize] as usize;
                 let (s, e) = (
@@ -356,10 +357,10 @@ mod tests {
                     .sum();
                 // f32 weight products summed in f64: 1e-6 relative.
                 assert!(
-                    (sum - dense[ci][cj]).abs() < 1e-6 * (1.0 + dense[ci][cj].abs()),
+                    (sum - row[cj]).abs() < 1e-6 * (1.0 + row[cj].abs()),
                     "({ci}, {cj})"
                 );
-                dense[ci][cj] = 0.0;
+                row[cj] = 0.0;
             }
         }
         // Nothing of the product lies outside the coarse pattern.

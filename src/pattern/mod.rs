@@ -8,6 +8,7 @@ mod format;
 pub mod garment;
 pub mod mesher;
 pub mod transfer;
+pub mod weld;
 
 use crate::error::InputError;
 use curve::{relative_point, Curve};

@@ -198,9 +198,9 @@ pub fn penetration_legend(scale: PenetrationScale) -> Legend {
     let mm = |d: f32| {
         let n = number(1000.0 * d);
         if d > 0.0 {
-            format!("+{n} MM")
+            format!("+{n} mm")
         } else {
-            format!("{n} MM")
+            format!("{n} mm")
         }
     };
     Legend {
@@ -220,14 +220,14 @@ mod tests {
     use super::*;
 
     #[test]
-    fn labels_read_as_percent_and_mm() {
+    fn labels_read_as_percent_and_millimetres() {
         let l = strain_legend(0.2);
         let labels: Vec<&str> = l.ticks.iter().map(|t| t.1.as_str()).collect();
         assert_eq!(labels, ["0%", "5%", "10%", "15%", "20%"]);
         assert_eq!(strain_legend(0.1).ticks[1].1, "2.5%");
         let p = penetration_legend(PenetrationScale::for_thickness(0.003));
         let labels: Vec<&str> = p.ticks.iter().map(|t| t.1.as_str()).collect();
-        assert_eq!(labels, ["-12 MM", "0 MM", "+3 MM", "+12 MM"]);
+        assert_eq!(labels, ["-12 mm", "0 mm", "+3 mm", "+12 mm"]);
         for (_, label) in l.ticks.iter().chain(&p.ticks) {
             assert!(super::super::font::covers(label), "{label}");
         }

@@ -1,5 +1,5 @@
-//! A 5×7 pixel bitmap font of the characters the legends use (digits, `% . - + ,` and a few
-//! capitals), so that labels need no font file or font crate. Glyphs are drawn scaled by whole
+//! A 5×7 pixel bitmap font of the characters the legends use (digits, `% . - + ,`, a few
+//! capitals and the `m` of mm), so that labels need no font file or font crate. Glyphs are drawn scaled by whole
 //! pixels, which keeps them sharp at any image size.
 
 /// Glyph width and height in font pixels; a character cell adds one column of spacing.
@@ -101,6 +101,10 @@ fn glyph(c: char) -> Option<[u8; 7]> {
         'Y' => [
             "10001", "10001", "01010", "00100", "00100", "00100", "00100",
         ],
+        // Lower case for units (mm), on the capitals' baseline with an x-height of 5 rows.
+        'm' => [
+            "00000", "00000", "11010", "10101", "10101", "10101", "10101",
+        ],
         _ => return None,
     };
     Some(rows.map(|r| u8::from_str_radix(r, 2).expect("five binary digits")))
@@ -146,7 +150,7 @@ mod tests {
 
     #[test]
     fn glyphs_are_distinct_and_five_wide() {
-        let chars = "0123456789%.,-+ABCDEGIMNOPRSTY";
+        let chars = "0123456789%.,-+ABCDEGIMNOPRSTYm";
         let all: Vec<[u8; 7]> = chars.chars().map(|c| glyph(c).unwrap()).collect();
         for (i, a) in all.iter().enumerate() {
             assert!(a.iter().all(|r| *r < 32));

@@ -6,24 +6,30 @@ mod animation;
 mod camera;
 mod colors;
 mod during_run;
+mod fabric_look;
 mod font;
 mod legend;
 mod obj_frame;
+mod occlusion;
 mod previewer;
 mod render;
 mod seams;
 
-pub use animation::{pick_frames, write_gif, MAX_ANIMATION_FRAMES};
+pub use animation::{
+    pick_frames, write_gif, write_turntable, MAX_ANIMATION_FRAMES, TURNTABLE_STEPS,
+};
 pub use camera::{Camera, CameraChoice, CameraPreset, PRESET_FOV_DEG};
 pub use colors::{
     panel_color, penetration_legend, strain_legend, strain_ramp, triangle_strain, ColorMode,
     Legend, PenetrationScale, BODY, FABRIC, PALETTE, SEAM,
 };
 pub use during_run::{RunPreviews, GIF_FILE};
+pub use fabric_look::{fabric_color, fabric_strain_max, FabricLook, LOOKS};
 pub use legend::{draw_legend, srgb_byte, text_scale, LegendBox};
 pub use obj_frame::{frames, read_obj, FrameMesh};
+pub use occlusion::{ambient_occlusion, REACH as OCCLUSION_REACH};
 pub use previewer::{Look, Previewer};
-pub use render::{render, DrawMesh, SHADER};
+pub use render::{render, render_textured, DrawMesh, FabricTexture, SHADER};
 pub use seams::seam_ribbons;
 
 use crate::atomic_file::write_atomic;
@@ -31,7 +37,7 @@ use crate::error::Error;
 use crate::gpu::AdapterChoice;
 use crate::scene::{CameraSetting, Scene, DEFAULT_STRAIN_MAX};
 use previewer::bad;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The camera a scene's `[preview] camera` names.
 pub fn scene_camera(setting: &CameraSetting) -> CameraChoice {
@@ -59,11 +65,19 @@ pub fn scene_look(scene: Option<&Scene>, mode: ColorMode) -> Look {
             camera: scene_camera(&s.preview.camera),
             mode,
             size: s.preview.size,
-            strain_max: s.preview.strain_max,
+            strain_max: (s.preview.strain_max).unwrap_or_else(|| fabric_strain_max(&s.fabric)),
             seams: s.preview.seams,
             legend: true,
-            colors: s.preview.colors.clone(),
+            // The scene's colours per panel (tinting the fabric image, if any), else the
+            // fabric's one colour for every panel, or the image's own.
+            colors: match (s.preview.colors.is_empty(), &s.preview.texture) {
+                (false, _) => s.preview.colors.clone(),
+                (true, Some(_)) => vec![glam::Vec3::ONE],
+                (true, None) => vec![fabric_color(&s.fabric)],
+            },
             checker: s.preview.checker.unwrap_or(0.0),
+            occlusion: mode == ColorMode::Fabric,
+            texture: s.preview.texture.clone(),
         },
         None => Look {
             camera: CameraChoice::Preset(CameraPreset::ThreeQuarter),
@@ -74,12 +88,24 @@ pub fn scene_look(scene: Option<&Scene>, mode: ColorMode) -> Look {
             legend: true,
             colors: Vec::new(),
             checker: 0.0,
+            occlusion: mode == ColorMode::Fabric,
+            texture: None,
         },
     }
 }
 
-/// Reads a run's `summary.json` and loads the scene it names (if it still exists) and its fps.
+/// Reads a run's `summary.json` and loads the scene it ran (its copy in the folder, see
+/// `run_folder::run_scene`) and its fps.
 pub fn run_scene_of(run: &Path) -> Result<(Option<Scene>, f32), Error> {
+    let (scene, fps, _) = run_summary(run)?;
+    Ok((scene, fps))
+}
+
+/// A run folder's frames as its summary lists them: frame numbers and files.
+type FrameList = Vec<(u32, PathBuf)>;
+
+/// `run_scene_of`, and the frames the summary lists.
+fn run_summary(run: &Path) -> Result<(Option<Scene>, f32, Option<FrameList>), Error> {
     let summary_path = run.join("summary.json");
     let summary: serde_json::Value = std::fs::read(&summary_path)
         .map_err(|e| Error::io(&summary_path, e))
@@ -92,37 +118,44 @@ pub fn run_scene_of(run: &Path) -> Result<(Option<Scene>, f32), Error> {
                 )
             })
         })?;
-    let scene = match summary["scene"].as_str() {
-        Some(path) => Some(Scene::load(Path::new(path))?),
-        None => None,
-    };
+    let scene = crate::run_folder::run_scene(run, &summary)?;
     let fps = summary["fps"].as_f64().unwrap_or(24.0) as f32;
-    Ok((scene, fps))
+    let frames = crate::run_folder::summary_frames(run, &summary);
+    Ok((scene, fps, frames))
 }
 
 /// Renders frame `frame` (`None`: the last) of the run in `run` and writes it to `out` as a
-/// PNG; or, when `out` ends in `.gif`, every frame in the folder as an animation (at the
-/// scene's `[preview] animation_size` unless `adjust` sets a size). The look starts from the
-/// run's scene (`[preview]`) and `adjust` changes it (the command line's options).
+/// PNG; or, when `out` ends in `.gif`, every frame of the run as an animation, or with
+/// `turntable` that frame seen from all around (at the scene's `[preview] animation_size`
+/// unless `adjust` sets a size). The look starts from the run's scene (`[preview]`) and
+/// `adjust` changes it (the command line's options).
 pub fn preview_run(
     run: &Path,
     frame: Option<u32>,
     mode: ColorMode,
     adapter: &AdapterChoice,
     adjust: impl FnOnce(&mut Look),
+    turntable: bool,
     out: &Path,
 ) -> Result<(), Error> {
     let gif = out
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gif"));
-    if gif && frame.is_some() {
+    if turntable && !gif {
+        return Err(bad(
+            out,
+            "a turntable is an animation",
+            "write it to a .gif (e.g. --out spin.gif)",
+        ));
+    }
+    if gif && frame.is_some() && !turntable {
         return Err(bad(
             out,
             "a .gif shows every frame, and --frame picks one",
             "leave out --frame, or write a .png",
         ));
     }
-    let (scene, fps) = run_scene_of(run)?;
+    let (scene, fps, listed) = run_summary(run)?;
     let mut look = scene_look(scene.as_ref(), mode);
     if gif {
         look.size = scene
@@ -131,14 +164,21 @@ pub fn preview_run(
     }
     adjust(&mut look);
     let mut previewer = Previewer::new(run, scene.as_ref(), fps, adapter)?;
+    if let Some(listed) = listed {
+        previewer.use_frames(listed);
+    }
     if gif {
-        let frames: Vec<u32> = obj_frame::frames(run)?
-            .into_iter()
-            .map(|(n, _)| n)
-            .collect();
         if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         }
+        if turntable {
+            return write_turntable(&mut previewer, frame, &look, out).map(|_| ());
+        }
+        let frames: Vec<u32> = previewer
+            .frame_files()?
+            .into_iter()
+            .map(|(n, _)| n)
+            .collect();
         return write_gif(&mut previewer, &frames, &look, fps, out).map(|_| ());
     }
     let pixels = previewer.image(frame, &look, None)?;

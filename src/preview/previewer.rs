@@ -8,7 +8,8 @@ use super::colors::{
 };
 use super::legend::draw_legend;
 use super::obj_frame::{frames, read_obj, FrameMesh};
-use super::render::{render, DrawMesh};
+use super::occlusion::ambient_occlusion;
+use super::render::{render_textured, DrawMesh, FabricTexture};
 use super::seams::{seam_ribbons, seam_segments};
 use crate::body::deform::Deformation;
 use crate::body::exact::ExactBody;
@@ -39,6 +40,11 @@ pub struct Look {
     pub colors: Vec<Vec3>,
     /// The checker's square size in pattern coordinates in m (0: none).
     pub checker: f32,
+    /// Darken folds and creases by ambient occlusion (the fabric look; the strain and
+    /// penetration colours are left exact).
+    pub occlusion: bool,
+    /// An image of the fabric over the pattern coordinates, in fabric mode.
+    pub texture: Option<crate::scene::TextureSetting>,
 }
 
 pub(super) fn bad(path: &Path, problem: impl Into<String>, fix: impl Into<String>) -> Error {
@@ -65,6 +71,15 @@ pub struct Previewer<'a> {
     exact: Option<Vec<ExactBody>>,
     rest: Option<Vec<Vec3>>,
     seams: Option<Vec<[u32; 2]>>,
+    /// The run's frames as its summary lists them (`None`: every frame file in the folder).
+    listed: Option<Vec<(u32, PathBuf)>>,
+    /// The scene's garment's seams welded, for normals that run smooth across them.
+    weld: Option<Option<crate::pattern::weld::Weld>>,
+    /// The fabric image, read once.
+    texture: Option<(crate::scene::TextureSetting, FabricTexture)>,
+    /// The last frame's ambient occlusion, which does not depend on the camera (a turntable
+    /// renders one frame many times).
+    occlusion: Option<(u32, Vec<Vec<[f32; 2]>>)>,
 }
 
 impl<'a> Previewer<'a> {
@@ -94,12 +109,29 @@ impl<'a> Previewer<'a> {
             exact: None,
             rest: None,
             seams: None,
+            listed: None,
+            weld: None,
+            texture: None,
+            occlusion: None,
         })
+    }
+
+    /// Shows only these frames (the run's, from its summary), not every frame file in the folder.
+    pub fn use_frames(&mut self, frames: Vec<(u32, PathBuf)>) {
+        self.listed = Some(frames);
+    }
+
+    /// The frames to show, in order.
+    pub fn frame_files(&self) -> Result<Vec<(u32, PathBuf)>, Error> {
+        match &self.listed {
+            Some(list) => Ok(list.clone()),
+            None => frames(&self.run),
+        }
     }
 
     /// The frame `n` (`None`: the last).
     pub fn load(&self, n: Option<u32>) -> Result<FrameMesh, Error> {
-        let all = frames(&self.run)?;
+        let all = self.frame_files()?;
         let found = match n {
             None => all.last().cloned(),
             Some(n) => all.iter().find(|(k, _)| *k == n).cloned(),
@@ -127,7 +159,7 @@ impl<'a> Previewer<'a> {
     /// Frame 0, the strain's rest shape, read once.
     fn rest(&mut self, particles: usize) -> Result<&[Vec3], Error> {
         if self.rest.is_none() {
-            let first = frames(&self.run)?.into_iter().next();
+            let first = self.frame_files()?.into_iter().next();
             let rest = match first {
                 Some((0, path)) => read_obj(&path)?.positions,
                 _ => Vec::new(),
@@ -151,12 +183,16 @@ impl<'a> Previewer<'a> {
         f: &FrameMesh,
         look: &Look,
     ) -> Result<(DrawMesh, Option<super::colors::Legend>), Error> {
+        let smooth_normals = self.smooth_normals(f)?;
         let mesh = |colors: Vec<Vec3>| DrawMesh {
             positions: f.positions.clone(),
             colors,
             triangles: f.triangles.clone(),
             uv: f.uv.clone(),
             checker: look.checker,
+            smooth_normals,
+            textured: look.texture.is_some() && look.mode == ColorMode::Fabric,
+            ..Default::default()
         };
         match look.mode {
             ColorMode::Fabric => {
@@ -249,6 +285,44 @@ impl<'a> Previewer<'a> {
         }
     }
 
+    /// Normals averaged across the garment's seams, so that its shading runs smooth from
+    /// panel to panel (empty for other cloth, or a frame of another mesh).
+    fn smooth_normals(&mut self, f: &FrameMesh) -> Result<Vec<Vec3>, Error> {
+        if self.weld.is_none() {
+            let garment = match self.scene {
+                Some(s) => s.build_garment()?,
+                None => None,
+            };
+            self.weld = Some(garment.as_ref().map(crate::pattern::weld::Weld::of_garment));
+        }
+        let Some(Some(weld)) = &self.weld else {
+            return Ok(Vec::new());
+        };
+        if weld.vertex_of.len() != f.positions.len() {
+            return Ok(Vec::new());
+        }
+        let own = crate::mesh::vertex_normals(&f.positions, &f.triangles);
+        let mut shared = vec![Vec3::ZERO; weld.len()];
+        for (n, &v) in own.iter().zip(&weld.vertex_of) {
+            shared[v as usize] += *n;
+        }
+        Ok(weld.vertex_of.iter().map(|&v| shared[v as usize]).collect())
+    }
+
+    /// Reads the fabric image of `setting` unless it is the one read already.
+    fn load_texture(
+        &mut self,
+        setting: Option<&crate::scene::TextureSetting>,
+    ) -> Result<(), Error> {
+        match setting {
+            Some(setting) if self.texture.as_ref().is_none_or(|(s, _)| s != setting) => {
+                self.texture = Some((setting.clone(), FabricTexture::load(setting)?));
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
     /// The seam segments of the scene's pattern (none for other cloth), built once.
     fn seam_segments(&mut self) -> Result<&[[u32; 2]], Error> {
         if self.seams.is_none() {
@@ -322,7 +396,33 @@ impl<'a> Previewer<'a> {
                 ..Default::default()
             });
         }
-        let mut pixels = render(&self.ctx, &meshes, &camera, w, h)?;
+        if look.occlusion {
+            // The cloth and the bodies shade each other; the seam ribbons take no part.
+            let solid: Vec<usize> = (0..meshes.len())
+                .filter(|&k| !(look.seams && k == 1))
+                .collect();
+            let fits = |o: &Vec<Vec<[f32; 2]>>| {
+                o.len() == solid.len()
+                    && (o.iter().zip(&solid)).all(|(v, &k)| v.len() == meshes[k].positions.len())
+            };
+            let cached = (self.occlusion.take()).filter(|(n, o)| *n == frame && fits(o));
+            let open = match cached {
+                Some((_, open)) => open,
+                None => {
+                    let picked: Vec<DrawMesh> = solid.iter().map(|&k| meshes[k].clone()).collect();
+                    ambient_occlusion(&picked)
+                }
+            };
+            for (&k, o) in solid.iter().zip(&open) {
+                meshes[k].occlusion = o.clone();
+            }
+            self.occlusion = Some((frame, open));
+        }
+        self.load_texture(look.texture.as_ref())?;
+        let texture = (self.texture.as_ref())
+            .filter(|_| look.texture.is_some())
+            .map(|(_, t)| t);
+        let mut pixels = render_textured(&self.ctx, &meshes, texture, &camera, w, h)?;
         if let Some(legend) = legend.filter(|_| look.legend) {
             draw_legend(&mut pixels, w, h, &legend);
         }

@@ -16,6 +16,8 @@ pub struct Fabric {
     pub bending_stiffness: Option<f32>,
     /// Spring damping as a fraction of each spring's critical damping.
     pub damping_ratio: f32,
+    /// The preset the values start from, if any (its look in previews and exports).
+    pub preset: Option<&'static str>,
 }
 
 /// Damping ratio when neither the scene nor a preset gives one.
@@ -89,5 +91,6 @@ pub(super) fn parse(c: &Checker, f: &RawFabric) -> Result<Fabric, InputError> {
             damping,
             "fractions of critical damping",
         )?,
+        preset: preset.map(|p| p.name),
     })
 }

@@ -16,11 +16,12 @@ mod world;
 
 pub use body::{BodySettings, BodySource, DeformMotion, DeformSettings, MAX_BODIES};
 pub use cloth::ClothSource;
-pub use fabric::Fabric;
+pub use fabric::{Fabric, HINGE_PER_RIGIDITY};
 pub use pins::{Corner, GridEdge, PinSelection};
 pub use presets::{preset, FabricPreset, PRESETS};
 pub use preview::{
-    hex_color, CameraSetting, PreviewSettings, CAMERA_PRESETS, DEFAULT_STRAIN_MAX, PREVIEW_MODES,
+    hex_color, CameraSetting, PreviewSettings, TextureSetting, CAMERA_PRESETS, DEFAULT_STRAIN_MAX,
+    PREVIEW_MODES,
 };
 pub use self_collision::SelfCollision;
 pub use solver::{

@@ -11,7 +11,8 @@ use glam::Vec3;
 pub const PREVIEW_MODES: &[&str] = &["fabric", "strain", "penetration"];
 /// The camera presets.
 pub const CAMERA_PRESETS: &[&str] = &["front", "back", "side", "three-quarter"];
-/// The default of `[preview] strain_max`: 20% strain shows full red.
+/// The strain shown in full red when neither `[preview] strain_max` nor the fabric gives one:
+/// 20%.
 pub const DEFAULT_STRAIN_MAX: f32 = 0.2;
 
 /// The previews' camera, as the scene gives it.
@@ -41,8 +42,8 @@ pub struct PreviewSettings {
     pub every_modes: Vec<String>,
     /// The camera.
     pub camera: CameraSetting,
-    /// The strain shown in full red, as a fraction (0.2 = 20%).
-    pub strain_max: f32,
+    /// The strain shown in full red, as a fraction (0.2 = 20%); `None`: the fabric's range.
+    pub strain_max: Option<f32>,
     /// Draw the seams as dark lines.
     pub seams: bool,
     /// Image size in pixels.
@@ -56,6 +57,21 @@ pub struct PreviewSettings {
     pub colors: Vec<Vec3>,
     /// The checker's square size in pattern coordinates, in m (`None`: no checker).
     pub checker: Option<f32>,
+    /// A fabric image laid over the pattern coordinates (`None`: plain colours).
+    pub texture: Option<TextureSetting>,
+}
+
+/// `[preview] texture` and `texture_size_m`: an image of the fabric, tiled over each panel's
+/// pattern coordinates with its vertical axis along the panel's y axis (the grain line of a
+/// GarmentCode drawing).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureSetting {
+    /// The PNG file, resolved against the scene's folder.
+    pub path: std::path::PathBuf,
+    /// The physical width and height one copy of the image covers, in m.
+    pub size_m: [f32; 2],
+    /// The image's width and height in pixels.
+    pub pixels: (u32, u32),
 }
 
 /// `"#rrggbb"` (sRGB) as linear RGB.
@@ -256,17 +272,20 @@ pub(super) fn parse(
             out.preview_modes.clone()
         },
         camera,
-        strain_max: {
-            let v = c.finite("preview", "strain_max", p.strain_max)?;
-            if !(0.001..=5.0).contains(&v) {
-                return Err(c.err(
-                    "preview",
-                    "strain_max",
-                    format!("{v} is outside 0.001 to 5 (it is a fraction, not a percentage)"),
-                    "write e.g. 0.2 for 20%",
-                ));
+        strain_max: match p.strain_max {
+            None => None,
+            Some(v) => {
+                let v = c.finite("preview", "strain_max", v)?;
+                if !(0.001..=5.0).contains(&v) {
+                    return Err(c.err(
+                        "preview",
+                        "strain_max",
+                        format!("{v} is outside 0.001 to 5 (it is a fraction, not a percentage)"),
+                        "write e.g. 0.2 for 20%",
+                    ));
+                }
+                Some(v)
             }
-            v
         },
         seams: p.seams,
         size: size(c, "size", p.size)?,
@@ -288,5 +307,56 @@ pub(super) fn parse(
             None => None,
             Some(v) => Some(c.within("preview", "checker_m", v, (1e-3, 10.0), "m")?),
         },
+        texture: texture(c, p)?,
     })
+}
+
+/// Validates `texture` and `texture_size_m`: a PNG that exists and decodes its header, tiled
+/// at a physical size from 1 mm to 10 m.
+fn texture(c: &Checker, p: &RawPreview) -> Result<Option<TextureSetting>, InputError> {
+    let Some(name) = &p.texture else {
+        if p.texture_size_m.is_some() {
+            return Err(c.err(
+                "preview",
+                "texture_size_m",
+                "a texture size without a texture",
+                "add texture = \"fabric.png\" (an image of the fabric), or remove texture_size_m",
+            ));
+        }
+        return Ok(None);
+    };
+    let base = c.path.parent().unwrap_or(std::path::Path::new("."));
+    let path = base.join(name);
+    let pixels = image::ImageReader::open(&path)
+        .and_then(|r| r.with_guessed_format())
+        .map_err(|e| e.to_string())
+        .and_then(|r| match r.format() {
+            Some(image::ImageFormat::Png) => r.into_dimensions().map_err(|e| e.to_string()),
+            _ => Err("it is not a PNG image".to_string()),
+        })
+        .map_err(|e| {
+            c.err(
+                "preview",
+                "texture",
+                format!("cannot read {}: {e}", path.display()),
+                "give the path of a PNG image of the fabric, relative to the scene file",
+            )
+        })?;
+    let Some(size) = p.texture_size_m else {
+        return Err(c.err(
+            "preview",
+            "texture_size_m",
+            "missing: the texture needs the size one copy of the image covers on the fabric",
+            "add texture_size_m = [width, height] in m, e.g. [0.1, 0.1] for a 10 cm repeat",
+        ));
+    };
+    let mut size_m = [0.0f32; 2];
+    for (k, v) in size.iter().enumerate() {
+        size_m[k] = c.within("preview", "texture_size_m", *v, (1e-3, 10.0), "m")?;
+    }
+    Ok(Some(TextureSetting {
+        path,
+        size_m,
+        pixels,
+    }))
 }

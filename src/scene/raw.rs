@@ -194,8 +194,7 @@ pub(super) struct RawSolver {
     pub(super) substeps: Option<RawSubsteps>,
     #[serde(default = "default_integrator")]
     pub(super) integrator: String,
-    #[serde(default = "default_iterations")]
-    pub(super) iterations: i64,
+    pub(super) iterations: Option<i64>,
     pub(super) tolerance: Option<f64>,
     pub(super) multigrid: Option<bool>,
     pub(super) smoothing_sweeps: Option<i64>,
@@ -248,13 +247,6 @@ fn default_strain_limit_iterations() -> i64 {
 fn default_fps() -> f64 {
     24.0
 }
-/// Sweeps per implicit substep; docs/src/implicit.md shows the residual it leaves.
-fn default_iterations() -> i64 {
-    DEFAULT_ITERATIONS
-}
-
-/// The default of `[solver] iterations`.
-pub(super) const DEFAULT_ITERATIONS: i64 = 10;
 
 /// A frame with a spring stretched past 500% is an exploded frame.
 fn default_max_strain() -> f64 {
@@ -285,6 +277,7 @@ pub(super) struct RawOutput {
     pub(super) pc2: Option<bool>,
     pub(super) gltf: Option<bool>,
     pub(super) formats: Option<Vec<String>>,
+    pub(super) weld_seams: Option<bool>,
 }
 
 fn default_every() -> i64 {
@@ -304,6 +297,7 @@ impl Default for RawOutput {
             pc2: None,
             gltf: None,
             formats: None,
+            weld_seams: None,
         }
     }
 }
@@ -333,8 +327,7 @@ fn default_fov() -> f64 {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawPreview {
     pub(super) camera: Option<RawCamera>,
-    #[serde(default = "default_strain_max")]
-    pub(super) strain_max: f64,
+    pub(super) strain_max: Option<f64>,
     #[serde(default)]
     pub(super) seams: bool,
     #[serde(default = "default_preview_size")]
@@ -345,26 +338,27 @@ pub(super) struct RawPreview {
     #[serde(default)]
     pub(super) colors: Vec<String>,
     pub(super) checker_m: Option<f64>,
+    pub(super) texture: Option<String>,
+    pub(super) texture_size_m: Option<[f64; 2]>,
 }
 
 impl Default for RawPreview {
     fn default() -> Self {
         RawPreview {
             camera: None,
-            strain_max: default_strain_max(),
+            strain_max: None,
             seams: false,
             size: default_preview_size(),
             animation: None,
             animation_size: default_animation_size(),
             colors: Vec::new(),
             checker_m: None,
+            texture: None,
+            texture_size_m: None,
         }
     }
 }
 
-fn default_strain_max() -> f64 {
-    super::preview::DEFAULT_STRAIN_MAX as f64
-}
 fn default_preview_size() -> [i64; 2] {
     [1280, 960]
 }

@@ -309,7 +309,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         } else {
             0.0
         },
-        iterations: s.iterations,
+        iterations: s.iterations_for(model.multigrid.is_some()),
         self_thickness,
         // Cells at least as large as the contact distance: all contacts lie in the 27 cells.
         hash_cell: self_thickness.max(1e-6),
@@ -453,6 +453,9 @@ pub struct RunStats {
     pub force_residual: Option<(f32, f32)>,
     /// Largest spring strain at the last good frame.
     pub last_edge_strain: f32,
+    /// The 99th percentile of the springs' strain at the last good frame.
+    #[serde(default)]
+    pub last_edge_strain_p99: f32,
     /// Largest particle speed at any output frame, in m/s.
     pub max_speed: f32,
     /// The last frame's mechanical energy (kinetic + gravitational + elastic) and its kinetic
@@ -664,6 +667,8 @@ pub fn simulate_from(
         stats.frames_run = frame;
         stats.max_edge_strain = stats.max_edge_strain.max(strain);
         stats.last_edge_strain = strain;
+        stats.last_edge_strain_p99 =
+            metrics::edge_strain_quantile(&state.positions, &prep.model.springs, 0.99);
         if prep.plan.contains(crate::plan::Pass::StrainLimit) {
             let cap = 0.999 * prep.params.strain_limit;
             let springs = &prep.model.springs;

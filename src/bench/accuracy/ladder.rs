@@ -96,7 +96,9 @@ impl Setting {
         Setting {
             integrator: scene.solver.integrator,
             step: scene.solver.substeps.map_or(Step::Auto(1.0), Step::Fixed),
-            iterations: scene.solver.iterations,
+            // The ladder scales a count it can see, so a scene without one starts from plain
+            // sweeps' default (with coarse levels, that many Newton steps).
+            iterations: scene.solver.iterations_for(false),
             spacing: 1.0,
             sdf: 1.0,
             body: 1.0,

@@ -190,7 +190,7 @@ impl Sweep {
     fn scene_for(&mut self, s: &Setting) -> Result<(Scene, usize, f64), String> {
         let mut scene = self.scene.clone();
         scene.solver.integrator = s.integrator;
-        scene.solver.iterations = s.iterations;
+        scene.solver.iterations = Some(s.iterations);
         scene.solver.frames = self.frames;
         scene.solver.max_substeps_per_frame = self.max_substeps;
         // Every point runs the same frames, so that all are compared at the same time.

@@ -131,8 +131,16 @@ fn stepping_text(s: &super::Stepping) -> String {
         .map_or("the stability estimate's".to_string(), |n| n.to_string());
     match s.integrator.as_str() {
         "implicit" => format!(
-            "implicit Euler (Vertex Block Descent), {steps} steps of {} sweeps a frame",
-            s.iterations
+            "implicit Euler, {steps} steps a frame of {}",
+            s.iterations.map_or(
+                "the default iterations (1 Newton step with coarse levels, 10 \
+                 sweeps without)"
+                    .to_string(),
+                |n| format!(
+                    "{n} iterations (Newton steps with \
+                 coarse levels, sweeps without)"
+                )
+            )
         ),
         other => format!("{other} Euler, {steps} substeps a frame"),
     }

@@ -40,8 +40,8 @@ pub struct Stepping {
     pub integrator: String,
     /// Substeps per frame (`None`: the scene's "auto").
     pub substeps: Option<u32>,
-    /// Implicit sweeps per substep.
-    pub iterations: u32,
+    /// Implicit iterations per substep (`None`: the scene's default).
+    pub iterations: Option<u32>,
     /// The most frames to wait for the settle rule.
     pub max_frames: u32,
 }
@@ -126,8 +126,8 @@ fn scene_toml(preset: &str, stretch: Option<f64>, spacing: f64, step: &Stepping)
         step.max_frames,
         step.integrator
     );
-    if step.integrator == "implicit" {
-        s += &format!("iterations = {}\n", step.iterations);
+    if let (true, Some(n)) = (step.integrator == "implicit", step.iterations) {
+        s += &format!("iterations = {n}\n");
     }
     s
 }

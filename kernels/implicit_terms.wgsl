@@ -1,0 +1,415 @@
+// Implicit Euler's incremental potential at one vertex: its force (−gradient), its Hessian
+// diagonal block (and, composed into `assemble`, the off-diagonal blocks of its row), the
+// vertex's constant stiffness, the contact filter and the force residual. Composed into every
+// kernel that evaluates the potential (contact_planes, vbd_solve, assemble, correction_filter,
+// line_energy, force_residual). CPU twin: src/cpu/implicit_terms.rs, where the terms and their
+// choices are documented; the functions here follow it line for line, in the same order of
+// sums.
+//
+// The iterate is each vertex's displacement D over the step (`disp`, w = inverse mass), the
+// inertial target Y (`inertial`) a displacement too; world positions are xₙ + D.
+
+@group(0) @binding(4) var pos: texture_2d<f32>;                   // xₙ, w = inverse mass (0: pinned)
+@group(0) @binding(5) var<storage, read_write> disp: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read> inertial: array<vec4<f32>>;
+// Each body's contact plane at each vertex, body after body (num_bodies × N): normal (xyz) and
+// c (w), φ ≈ c + n̂·D; written by contact_planes.
+@group(0) @binding(7) var<storage, read_write> planes: array<vec4<f32>>;
+// Each vertex's normal force per body at the start of the step (friction's λ), in N.
+@group(0) @binding(8) var<storage, read_write> lambdas: array<vec4<f32>>;
+@group(0) @binding(9) var spring_offsets: texture_2d<u32>;        // r32uint, N + 1 entries
+@group(0) @binding(10) var springs: texture_2d<u32>;              // one SpringRef per texel
+
+// Contact is this many times stiffer than the vertex's own stiffness (cpu: CONTACT_RATIO).
+const CONTACT_RATIO: f32 = 100.0;
+// A vertex within this fraction of the thickness outside a body's contact layer touches it
+// (cpu: CONTACT_SLACK_FRACTION).
+const CONTACT_SLACK_FRACTION: f32 = 0.01;
+
+fn prev(i: u32) -> vec4<f32> {
+    return textureLoad(pos, texel(i), 0);
+}
+
+fn is_free(j: u32) -> bool {
+    return prev(j).w != 0.0;
+}
+
+// Vertex i's world position at the iterate.
+fn world(i: u32) -> vec3<f32> {
+    return prev(i).xyz + disp[i].xyz;
+}
+
+// Vertex i's plane for body b.
+fn plane(b: u32, i: u32) -> vec4<f32> {
+    return planes[b * params.num_particles + i];
+}
+
+// Hessian of ½k(|d| − L)² in d, made positive semi-definite (a compressed spring's transverse
+// term dropped).
+fn spring_hessian(k: f32, rest: f32, d: vec3<f32>, len: f32) -> mat3x3<f32> {
+    let n = d / len;
+    let nn = outer(n, n);
+    let transverse = max(1.0 - rest / len, 0.0);
+    return k * nn + (k * transverse) * (identity() - nn);
+}
+
+// Body b's slip of vertex i over the step relative to the body surface, in the plane with
+// normal n: the displacement less the body's own over the step.
+fn slip(b: u32, i: u32, d: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let pose = step.bodies[b];
+    let offset = prev(i).xyz - pose.translation.xyz;
+    let u = d - params.dt * (pose.velocity.xyz + cross(pose.angular_velocity.xyz, offset));
+    return u - dot(u, n) * n;
+}
+
+// Whether vertex i at displacement d touches body b (within CONTACT_SLACK_FRACTION of its
+// contact layer, or inside it).
+fn touching(b: u32, i: u32, d: vec3<f32>) -> bool {
+    let pl = plane(b, i);
+    return pl.w + dot(pl.xyz, d) < params.bodies[b].thickness * (1.0 + CONTACT_SLACK_FRACTION);
+}
+
+// The vertex's constant stiffness times CONTACT_RATIO: the mean diagonal of what does not
+// depend on the state (inertia, air damping, each spring's (k + c/h)/3, each seam pair's
+// share²·(k + c/h)).
+fn contact_stiffness(i: u32) -> f32 {
+    let h = params.dt;
+    let mass = 1.0 / prev(i).w;
+    var sum = mass / (h * h) + params.air_damping * mass / h;
+    let first = textureLoad(spring_offsets, texel(i), 0).x;
+    let end = textureLoad(spring_offsets, texel(i + 1u), 0).x;
+    for (var k = first; k < end; k = k + 1u) {
+        let s = unpack_spring(textureLoad(springs, texel(k), 0));
+        sum = sum + (s.stiffness + s.damping / h) / 3.0;
+    }
+    sum = add_seam_stiffness(i, sum);
+    return CONTACT_RATIO * sum;
+}
+
+// A vertex's force and Hessian diagonal block.
+struct VertexSystem {
+    force: vec3<f32>,            // f = −∇ᵢG, in N
+    hessian: mat3x3<f32>,        // ∂²G/∂Dᵢ², in N/m
+}
+
+// A spring's stretch |e| − L for e = start + change, as (|start| − L) plus the change's share
+// (2·start·change + |change|²)/(|e| + |start|): smooth in the change down to its own rounding,
+// where |e| in f32 moves in steps of its ulp (CPU twin: stretch in src/cpu/implicit_terms.rs,
+// which says why).
+fn stretch(start: vec3<f32>, start_len: f32, change: vec3<f32>, len: f32, rest: f32) -> f32 {
+    let grow = 2.0 * dot(start, change) + dot(change, change);
+    let sum = len + start_len;
+    var share = 0.0;
+    if (sum > 0.0) {
+        share = grow / sum;
+    }
+    return (start_len - rest) + share;
+}
+
+// Vertex i's force and Hessian diagonal block at the iterate, with the contact of the first
+// `bodies` bodies (contact_planes asks for none); a pinned vertex's are zero. When
+// `assembling`, each off-diagonal block of the vertex's Hessian row is added to its slot of
+// the fine matrix (sink; blocks towards pinned vertices are left out).
+fn vertex_system(i: u32, bodies: u32, assembling: bool) -> VertexSystem {
+    let h = params.dt;
+    let p = prev(i);
+    if (p.w == 0.0) {
+        return VertexSystem(vec3<f32>(0.0), mat3x3<f32>());
+    }
+    let mass = 1.0 / p.w;
+    let di = disp[i].xyz;
+    let inertia = mass / (h * h);
+    let air = params.air_damping * mass / h;
+    var f = -inertia * (di - inertial[i].xyz) - air * di;
+    var hess = diagonal(inertia + air);
+
+    let first = textureLoad(spring_offsets, texel(i), 0).x;
+    let end = textureLoad(spring_offsets, texel(i + 1u), 0).x;
+    for (var k = first; k < end; k = k + 1u) {
+        let s = unpack_spring(textureLoad(springs, texel(k), 0));
+        let j = s.other;
+        let start = p.xyz - prev(j).xyz;
+        let change = di - disp[j].xyz;
+        let e = start + change;
+        let len = length(e);
+        let start_len = length(start);
+        var block = mat3x3<f32>();
+        if (len > 1e-12) {
+            f = f - s.stiffness * stretch(start, start_len, change, len, s.rest_length) / len * e;
+            block = block + spring_hessian(s.stiffness, s.rest_length, e, len);
+        }
+        if (start_len > 1e-12) {
+            let n = start / start_len;
+            f = f - s.damping / h * dot(n, change) * n;
+            block = block + (s.damping / h) * outer(n, n);
+        }
+        hess = hess + block;
+        if (assembling && is_free(j)) {
+            sink(spring_slot(k), -1.0 * block);
+        }
+    }
+
+    add_hinges(i, assembling, &f, &hess);
+    add_seams(i, assembling, &f, &hess);
+
+    if (bodies > 0u) {
+        let k_c = contact_stiffness(i);
+        for (var b = 0u; b < bodies; b = b + 1u) {
+            let body = params.bodies[b];
+            let pl = plane(b, i);
+            let n = pl.xyz;
+            let phi = pl.w + dot(n, di);
+            if (phi < body.thickness) {
+                f = f + k_c * (body.thickness - phi) * n;
+                hess = hess + k_c * outer(n, n);
+            }
+            let lambda = lambdas[i][b];
+            if (lambda > 0.0 && body.friction > 0.0) {
+                let u = slip(b, i, di, n);
+                let scale = body.friction * lambda / max(length(u), body.friction_slip_speed * h);
+                f = f - scale * u;
+                hess = hess + scale * (identity() - outer(n, n));
+            }
+        }
+    }
+    return VertexSystem(f, hess);
+}
+
+// The projection that removes the normals of the bodies vertex i touches (Gram–Schmidt over
+// the bodies in order), and whether it removed any; the identity without contact.
+struct Filter {
+    s: mat3x3<f32>,
+    filtered: bool,
+}
+
+fn contact_filter(i: u32) -> Filter {
+    var out = Filter(identity(), false);
+    if (prev(i).w == 0.0) {
+        return out;
+    }
+    let di = disp[i].xyz;
+    for (var b = 0u; b < params.num_bodies; b = b + 1u) {
+        let n = plane(b, i).xyz;
+        if (touching(b, i, di)) {
+            let m = out.s * n;
+            let len = length(m);
+            if (len > 1e-3) {
+                let u = m / len;
+                out.s = out.s - outer(u, u);
+                out.filtered = true;
+            }
+        }
+    }
+    return out;
+}
+
+// Gravity's magnitude that weighs the residual: the scene's, or standard gravity when it is off
+// (cpu: residual_gravity).
+fn residual_gravity() -> f32 {
+    let g = length(params.gravity.xyz);
+    if (g > 0.0) {
+        return g;
+    }
+    return 9.80665;
+}
+
+// |fᵢ| / (mᵢ·g) at vertex i with the normals of the bodies it touches left out; 0 for a pinned
+// vertex.
+fn force_residual_at(i: u32, g: f32) -> f32 {
+    let w = prev(i).w;
+    if (w == 0.0) {
+        return 0.0;
+    }
+    let f = vertex_system(i, params.num_bodies, false).force;
+    return length(contact_filter(i).s * f) * w / g;
+}
+
+// Hinge energy w₀·ψ(θ) from s = sin(θ/2) and s₀ = sin(θ₀/2) (cpu: hinge_psi).
+fn hinge_psi(s_in: f32, s0: f32) -> f32 {
+    let s = clamp(s_in, -1.0, 1.0);
+    return -2.0 * sqrt(max(1.0 - s * s, 0.0)) - 2.0 * s0 * asin(s);
+}
+
+// The share of a seam pair's force that its vertex of `role` takes.
+fn seam_share(s: Seam, role: u32) -> f32 {
+    switch role {
+        case 0u: { return 1.0; }
+        case 1u: { return -(1.0 - s.weight); }
+        default: { return -s.weight; }
+    }
+}
+
+// A seam pair's rest gap now: its open gap, shrinking to 0 at the sewing rate (cpu: rest_gap).
+fn rest_gap(s: Seam) -> f32 {
+    return s.open_gap * max(1.0 - params.sewing_rate * step.time, 0.0);
+}
+
+// section bending
+@group(0) @binding(11) var hinge_offsets: texture_2d<u32>;       // r32uint, N + 1 entries
+@group(0) @binding(12) var hinge_refs: texture_2d<u32>;          // r32uint: hinge index * 4 + role
+@group(0) @binding(13) var hinges: texture_2d<u32>;              // two texels per Hinge
+
+fn hinge_at(h: u32) -> Hinge {
+    return unpack_hinge(textureLoad(hinges, texel(2u * h), 0), textureLoad(hinges, texel(2u * h + 1u), 0));
+}
+
+// The hinge's frame at the iterate plus a·c (c: the correction; a = 0 for the iterate itself).
+fn hinge_frame_at(hinge: Hinge, c: array<vec3<f32>, 4>, a: f32) -> HingeFrame {
+    let v = hinge.v;
+    return hinge_frame(
+        hinge.stiffness,
+        prev(v.x).xyz + (disp[v.x].xyz + a * c[0]),
+        prev(v.y).xyz + (disp[v.y].xyz + a * c[1]),
+        prev(v.z).xyz + (disp[v.z].xyz + a * c[2]),
+        prev(v.w).xyz + (disp[v.w].xyz + a * c[3]),
+    );
+}
+
+fn add_hinges(i: u32, assembling: bool, f: ptr<function, vec3<f32>>, hess: ptr<function, mat3x3<f32>>) {
+    let first = textureLoad(hinge_offsets, texel(i), 0).x;
+    let end = textureLoad(hinge_offsets, texel(i + 1u), 0).x;
+    for (var k = first; k < end; k = k + 1u) {
+        let r = textureLoad(hinge_refs, texel(k), 0).x;
+        let hinge = hinge_at(r / 4u);
+        let v = hinge.v;
+        let t = hinge_frame(hinge.stiffness, world(v.x), world(v.y), world(v.z), world(v.w));
+        if (!t.valid) {
+            continue;
+        }
+        let role = r % 4u;
+        let u = hinge_direction(t, role);
+        *f = *f + hinge.rest_weight * (t.sin_half - hinge.rest_sin_half) * u;
+        let cos_half = sqrt(max(1.0 - t.sin_half * t.sin_half, 0.0));
+        let c = 0.5 * cos_half * hinge.rest_weight;
+        *hess = *hess + c * outer(u, u);
+        if (assembling) {
+            for (var other = 0u; other < 4u; other = other + 1u) {
+                if (other != role && is_free(v[other])) {
+                    sink(hinge_slot(k, other), c * outer(u, hinge_direction(t, other)));
+                }
+            }
+        }
+    }
+}
+// else bending
+fn add_hinges(i: u32, assembling: bool, f: ptr<function, vec3<f32>>, hess: ptr<function, mat3x3<f32>>) {}
+// end bending
+
+// section seams
+@group(0) @binding(14) var seam_offsets: texture_2d<u32>;        // r32uint, N + 1 entries
+@group(0) @binding(15) var seam_refs: texture_2d<u32>;           // r32uint: pair index * 4 + role
+@group(0) @binding(16) var seams: texture_2d<u32>;               // two texels per Seam
+
+fn seam_at(p: u32) -> Seam {
+    return unpack_seam(textureLoad(seams, texel(2u * p), 0), textureLoad(seams, texel(2u * p + 1u), 0));
+}
+
+// A seam pair's gap (partner point minus seam vertex) and opening (its change over the step).
+struct SeamGap {
+    gap: vec3<f32>,
+    opening: vec3<f32>,
+}
+
+fn seam_gap(s: Seam) -> SeamGap {
+    let w = s.weight;
+    let a = prev(s.v.x).xyz;
+    let b0 = prev(s.v.y).xyz;
+    let b1 = prev(s.v.z).xyz;
+    let opening = (1.0 - w) * disp[s.v.y].xyz + w * disp[s.v.z].xyz - disp[s.v.x].xyz;
+    let start = (1.0 - w) * (b0 - a) + w * (b1 - a);
+    return SeamGap(start + opening, opening);
+}
+
+// A seam pair's spring and damping force on its seam vertex, and that force's Hessian.
+struct SeamSystem {
+    fa: vec3<f32>,
+    ha: mat3x3<f32>,
+}
+
+fn seam_system(s: Seam) -> SeamSystem {
+    let h = params.dt;
+    let g = seam_gap(s);
+    let rest = rest_gap(s);
+    var fa = s.damping / h * g.opening;
+    var ha = diagonal(s.damping / h);
+    if (rest <= 0.0) {
+        fa = fa + s.stiffness * g.gap;
+        ha = ha + diagonal(s.stiffness);
+    } else {
+        let len = length(g.gap);
+        if (len > rest) {
+            fa = fa + s.stiffness * (len - rest) / len * g.gap;
+            ha = ha + spring_hessian(s.stiffness, rest, g.gap, len);
+        }
+    }
+    return SeamSystem(fa, ha);
+}
+
+fn add_seams(i: u32, assembling: bool, f: ptr<function, vec3<f32>>, hess: ptr<function, mat3x3<f32>>) {
+    let first = textureLoad(seam_offsets, texel(i), 0).x;
+    let end = textureLoad(seam_offsets, texel(i + 1u), 0).x;
+    for (var k = first; k < end; k = k + 1u) {
+        let r = textureLoad(seam_refs, texel(k), 0).x;
+        let s = seam_at(r / 4u);
+        let sys = seam_system(s);
+        let role = r % 4u;
+        let share = seam_share(s, role);
+        *f = *f + share * sys.fa;
+        *hess = *hess + (share * share) * sys.ha;
+        if (assembling) {
+            for (var other = 0u; other < 3u; other = other + 1u) {
+                let share_j = seam_share(s, other);
+                if (other != role && is_free(s.v[other]) && share_j != 0.0) {
+                    sink(seam_slot(k, other), (share * share_j) * sys.ha);
+                }
+            }
+        }
+    }
+}
+
+fn add_seam_stiffness(i: u32, sum_in: f32) -> f32 {
+    let h = params.dt;
+    var sum = sum_in;
+    let first = textureLoad(seam_offsets, texel(i), 0).x;
+    let end = textureLoad(seam_offsets, texel(i + 1u), 0).x;
+    for (var k = first; k < end; k = k + 1u) {
+        let r = textureLoad(seam_refs, texel(k), 0).x;
+        let s = seam_at(r / 4u);
+        let share = seam_share(s, r % 4u);
+        sum = sum + share * share * (s.stiffness + s.damping / h);
+    }
+    return sum;
+}
+// else seams
+fn add_seams(i: u32, assembling: bool, f: ptr<function, vec3<f32>>, hess: ptr<function, mat3x3<f32>>) {}
+fn add_seam_stiffness(i: u32, sum_in: f32) -> f32 {
+    return sum_in;
+}
+// end seams
+
+// section assemble
+// The fine matrix's blocks and where each element's go (assemble.wgsl binds them).
+fn sink(slot: u32, m: mat3x3<f32>) {
+    blocks[slot] = blocks[slot] + m;
+}
+fn spring_slot(k: u32) -> u32 {
+    return hier[hier[HIER_SPRING_SLOTS] + k];
+}
+fn hinge_slot(k: u32, role: u32) -> u32 {
+    return hier[hier[HIER_HINGE_SLOTS] + 4u * k + role];
+}
+fn seam_slot(k: u32, role: u32) -> u32 {
+    return hier[hier[HIER_SEAM_SLOTS] + 4u * k + role];
+}
+// else assemble
+fn sink(slot: u32, m: mat3x3<f32>) {}
+fn spring_slot(k: u32) -> u32 {
+    return 0u;
+}
+fn hinge_slot(k: u32, role: u32) -> u32 {
+    return 0u;
+}
+fn seam_slot(k: u32, role: u32) -> u32 {
+    return 0u;
+}
+// end assemble

@@ -1,0 +1,59 @@
+// One row of each operation on a level's linear system A·e = rhs (the Newton step's
+// preconditioner): a block Gauss–Seidel update, the residual, restriction and prolongation.
+// Composed (after hierarchy.wgsl and block_texels.wgsl) into smooth, level_residual, restrict and prolong, which run
+// one operation over a level's rows per dispatch, and into coarse_cycle, which runs a list of
+// them on small levels in one workgroup. Every level's rows are concatenated in rhs, e and res
+// (at the level's vec_base); level 0's rhs is conjugate gradients' residual r and its e the
+// preconditioned residual z. CPU twins: src/cpu/smooth.rs, restrict.rs, prolong.rs.
+
+@group(0) @binding(24) var<storage, read_write> rhs: array<vec4<f32>>;
+@group(0) @binding(25) var<storage, read_write> e: array<vec4<f32>>;
+@group(0) @binding(26) var<storage, read_write> res: array<vec4<f32>>;
+
+// Row r's correction after one block Gauss–Seidel update:
+// A_rr⁻¹(rhs_r − Σ_{c≠r} A_rc·e_c) (zero where A_rr is singular: a pinned particle).
+fn smooth_row(lv: Level, r: u32) -> vec3<f32> {
+    let start = row_start(lv, r);
+    let end = row_start(lv, r + 1u);
+    var sum = rhs[lv.vec_base + r].xyz;
+    for (var b = start + 1u; b < end; b = b + 1u) {
+        sum = sum - block_at(lv.block_base + b) * e[lv.vec_base + block_column(lv, b)].xyz;
+    }
+    return solve3(block_at(lv.block_base + start), sum);
+}
+
+// Row r's residual rhs_r − Σ_c A_rc·e_c.
+fn residual_row(lv: Level, r: u32) -> vec3<f32> {
+    let start = row_start(lv, r);
+    let end = row_start(lv, r + 1u);
+    var sum = rhs[lv.vec_base + r].xyz;
+    for (var b = start; b < end; b = b + 1u) {
+        sum = sum - block_at(lv.block_base + b) * e[lv.vec_base + block_column(lv, b)].xyz;
+    }
+    return sum;
+}
+
+// Coarse particle c's restricted residual: its finer children's residuals times their
+// weights, in order (`coarse` is the level written, `finer` the level below it).
+fn restrict_row(coarse: Level, finer: Level, c: u32) -> vec4<f32> {
+    let start = hier[coarse.children_at + c];
+    let end = hier[coarse.children_at + c + 1u];
+    var sum = vec4<f32>(0.0);
+    for (var t = start; t < end; t = t + 1u) {
+        let f = hier[coarse.child_items_at + 2u * t];
+        let w = bitcast<f32>(hier[coarse.child_items_at + 2u * t + 1u]);
+        sum = sum + w * res[finer.vec_base + f];
+    }
+    return sum;
+}
+
+// The weighted sum of finer row i's three parents' corrections on the coarse level.
+fn prolong_row(coarse: Level, i: u32) -> vec3<f32> {
+    var sum = vec3<f32>(0.0);
+    for (var k = 0u; k < 3u; k = k + 1u) {
+        let parent = hier[coarse.parents_at + 3u * i + k];
+        let w = bitcast<f32>(hier[coarse.weights_at + 3u * i + k]);
+        sum = sum + w * e[coarse.vec_base + parent].xyz;
+    }
+    return sum;
+}

@@ -1,0 +1,535 @@
+//! Implicit Euler's solve on lavapipe, stage by stage: every GPU kernel of the solve run from the
+//! same inputs as its CPU twin, on two cases: the T-shirt as placed (springs, hinges, seams,
+//! three coarse levels; the level operations run in `coarse_cycle`'s single workgroup, as on
+//! software adapters) and the pinched cloth (two bodies, contact and friction; every level
+//! operation dispatched on its own, as on hardware GPUs).
+//!
+//! The bounds: both backends evaluate the same f32 expressions in the same order, so they differ
+//! only where an operation rounds differently (FMA contraction, the adapter's sqrt, divide and
+//! asin), by about one rounding, ε = 2^-24 relative, of the quantities involved. Each bound is
+//! that rounding times the scale of the terms a value sums (not of the value: sums cancel),
+//! times the number of roundings on the way, with margin; the scales come from the CPU twins.
+
+#[path = "../common/mod.rs"]
+mod common;
+mod linear;
+
+use common::{fixture, gpu, max_abs_diff, max_norm, perturbed};
+use drapekit::cpu::{self, Elements, Implicit, PcgScalars, VbdElements};
+use drapekit::gpu::implicit::layout::SolveScalars;
+use drapekit::gpu::implicit::{SolveArray, SolveOptions};
+use drapekit::gpu::GpuSolver;
+use drapekit::model::layout::SubstepParams;
+use drapekit::model::multigrid::Multigrid;
+use drapekit::model::Csr;
+use drapekit::plan::{Pass, SolveOp};
+use drapekit::scene::Scene;
+use drapekit::sim::{prepare, substep_params, Prepared};
+use drapekit::solver::{ParticleState, Solver};
+use glam::{Mat3, Vec3, Vec4};
+use linear::{check_coarse_operators, check_level_op, check_pcg, Level, Pcg};
+
+/// f32's relative rounding.
+const EPS: f32 = f32::EPSILON / 2.0;
+
+/// The T-shirt as placed, with the body and gravity, its particles moved by up to 5 mm and
+/// moving at up to 0.5 m/s: every element far from rest.
+fn tshirt() -> (Prepared, ParticleState, SubstepParams) {
+    let mut scene = Scene::load(&fixture("scenes/tshirt_drape_cotton.toml")).unwrap();
+    scene.gravity_start = 0.0;
+    let mut prep = prepare(&scene).unwrap();
+    prep.params.gravity = [0.0, -9.81, 0.0, 0.0];
+    let mut cpu = cpu::CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let state = perturbed(&cpu.state().unwrap(), 11, 5e-3, 0.5);
+    let step = substep_params(&prep, 3)[0];
+    (prep, state, step)
+}
+
+#[test]
+fn parity_solve_stages_tshirt() {
+    let Some(ctx) = gpu() else { return };
+    let (prep, state, step) = tshirt();
+    let single = SolveOptions {
+        small_rows: u32::MAX,
+    };
+    let g = GpuSolver::with_options(ctx, &prep.model, prep.params, &prep.plan, 1, single);
+    check_stages("tshirt", g.unwrap(), Case::new(prep, state, step));
+}
+
+#[test]
+fn parity_solve_stages_pinched() {
+    let Some(ctx) = gpu() else { return };
+    let (prep, state, step) = common::pinched();
+    let apart = SolveOptions { small_rows: 0 };
+    let g = GpuSolver::with_options(ctx, &prep.model, prep.params, &prep.plan, 1, apart);
+    check_stages("pinched", g.unwrap(), Case::new(prep, state, step));
+}
+
+/// The CPU side of a substep's solve: the state at the start of the step and the solve's
+/// arrays as the CPU twins leave them.
+struct Case {
+    prep: Prepared,
+    state: ParticleState,
+    step: SubstepParams,
+    elements: Elements,
+    x: Vec<Vec4>,
+    y: Vec<Vec4>,
+    planes: Vec<Vec4>,
+    lambdas: Vec<Vec4>,
+}
+
+impl Case {
+    /// `vbd_init`'s target and guess from `state`.
+    fn new(prep: Prepared, state: ParticleState, step: SubstepParams) -> Case {
+        let n = prep.model.len();
+        let (mut x, mut y) = (vec![Vec4::ZERO; n], vec![Vec4::ZERO; n]);
+        let mut force = vec![Vec4::ZERO; n];
+        let p = &prep.params;
+        let (pos, vel) = (&state.positions, &state.velocities);
+        cpu::vbd_init(p, pos, vel, &mut force, &mut x, &mut y, &mut [0.0]);
+        let bodies = (prep.params.num_bodies as usize).max(1);
+        Case {
+            elements: Elements::new(&prep.model),
+            planes: vec![Vec4::ZERO; bodies * n],
+            lambdas: vec![Vec4::ZERO; n],
+            prep,
+            state,
+            step,
+            x,
+            y,
+        }
+    }
+
+    fn mg(&self) -> Multigrid {
+        (self.prep.model.multigrid.as_deref().cloned()).expect("the scene has coarse levels")
+    }
+
+    /// `f` on the stages' shared inputs, with the elements `el` (all of them: `None`).
+    fn with_elements<T>(&self, el: Option<&VbdElements>, f: impl FnOnce(&Implicit) -> T) -> T {
+        let all = self.elements.view();
+        let s = Implicit {
+            params: &self.prep.params,
+            step: &self.step,
+            prev: &self.state.positions,
+            target: &self.y,
+            el: el.unwrap_or(&all),
+            planes: &self.planes,
+            lambdas: &self.lambdas,
+        };
+        f(&s)
+    }
+
+    fn with<T>(&self, f: impl FnOnce(&Implicit) -> T) -> T {
+        self.with_elements(None, f)
+    }
+
+    /// The largest spring length at the iterate, in m: the scale of the lengths whose rounding
+    /// the forces carry.
+    fn longest_edge(&self) -> f32 {
+        let world = |i: u32| (self.state.positions[i as usize] + self.x[i as usize]).truncate();
+        let springs = self.prep.model.springs.iter();
+        springs
+            .map(|s| world(s.ends[0]).distance(world(s.ends[1])))
+            .fold(0.0, f32::max)
+    }
+
+    /// The largest entry of any free vertex's Hessian diagonal block (contact included,
+    /// unfiltered), in N/m: it bounds every stiffness a vertex's force sums.
+    fn stiffest(&self) -> f32 {
+        self.with(|s| {
+            (0..self.prep.model.len())
+                .map(|i| mat_max(&s.vertex_system(i, &self.x, None, &mut |_, _| {}).hessian))
+                .fold(0.0, f32::max)
+        })
+    }
+}
+
+fn mat_max(m: &Mat3) -> f32 {
+    m.to_cols_array().iter().fold(0.0f32, |a, v| a.max(v.abs()))
+}
+
+fn block_diff(a: &[Mat3], b: &[Mat3]) -> f32 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| mat_max(&(*x - *y)))
+        .fold(0.0, f32::max)
+}
+
+fn abs_vecs(a: &[Vec4]) -> Vec<Vec4> {
+    a.iter().map(|v| v.abs()).collect()
+}
+
+fn abs_blocks(a: &[Mat3]) -> Vec<Mat3> {
+    (a.iter())
+        .map(|m| Mat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs()))
+        .collect()
+}
+
+fn abs_weights(c: &Csr<(u32, f32)>) -> Csr<(u32, f32)> {
+    Csr {
+        offsets: c.offsets.clone(),
+        items: c.items.iter().map(|&(i, w)| (i, w.abs())).collect(),
+    }
+}
+
+fn longest_run<T>(c: &Csr<T>) -> usize {
+    c.offsets
+        .windows(2)
+        .map(|w| (w[1] - w[0]) as usize)
+        .max()
+        .unwrap_or(0)
+}
+
+/// Asserts `diff <= bound` and says both.
+fn within(what: &str, diff: f32, bound: f32) {
+    eprintln!("  {what}: {diff:.2e} (bound {bound:.2e})");
+    assert!(diff <= bound, "{what}: differs by {diff}, bound {bound}");
+}
+
+fn check_stages(label: &str, mut g: GpuSolver, mut c: Case) {
+    eprintln!("{label}:");
+    let n = c.prep.model.len();
+    let mg = c.mg();
+    let step = c.step;
+    g.set_state(&c.state);
+
+    // vbd_init: D⁰ = h·v and Y = D⁰ + h²·a, at most two roundings each that FMA contraction may
+    // merge: one rounding of the largest |Y| (and |D⁰| ≤ that).
+    g.run_passes(&[Pass::VbdInit], &[step]).unwrap();
+    let scale = max_norm(&c.y).max(max_norm(&c.x));
+    let x = g.solve_array(SolveArray::Displacement).unwrap();
+    let y = g.solve_array(SolveArray::Target).unwrap();
+    within("vbd_init D", max_abs_diff(&x, &c.x), 2.0 * EPS * scale);
+    within("vbd_init Y", max_abs_diff(&y, &c.y), 2.0 * EPS * scale);
+    g.set_solve_array(SolveArray::Displacement, &c.x).unwrap();
+    g.set_solve_array(SolveArray::Target, &c.y).unwrap();
+
+    check_contact_planes(&mut g, &mut c);
+    check_sweep(&mut g, &mut c);
+    let (force, blocks) = check_assemble(&mut g, &c, &mg);
+
+    // The linear system's levels.
+    let mut lv = vec![Level::new(n, blocks)];
+    lv.extend(
+        (mg.levels.iter()).map(|l| Level::new(l.len(), vec![Mat3::ZERO; l.pattern.blocks()])),
+    );
+    check_coarse_operators(&mut g, &mut lv, &mg, step);
+    let mut correction = vec![Vec4::ZERO; n];
+    let l0 = &mut lv[0];
+    cpu::pcg_start(&force, &mut correction, &mut l0.rhs, &mut l0.e);
+    g.set_solve_array(SolveArray::Force, &force).unwrap();
+    g.run_solve_ops(&[SolveOp::PcgStart], &step).unwrap();
+    // c = 0, r = f and z = 0 are copies: exact.
+    assert_eq!(g.solve_array(SolveArray::Rhs(0)).unwrap(), lv[0].rhs);
+    assert_eq!(
+        g.solve_array(SolveArray::LevelCorrection(0)).unwrap(),
+        lv[0].e
+    );
+    assert_eq!(g.solve_array(SolveArray::Correction).unwrap(), correction);
+
+    // Two conjugate-gradient iterations, each after a V-cycle checked operation by operation.
+    let schedule = g.solve_schedule().unwrap();
+    let start = schedule
+        .iter()
+        .position(|op| matches!(op, SolveOp::Smooth { .. }));
+    let end = schedule
+        .iter()
+        .position(|op| matches!(op, SolveOp::PcgDirection { .. }));
+    let v_cycle = &schedule[start.unwrap()..end.unwrap()];
+    let coloring = c.prep.model.vertex_coloring();
+    let fine: Vec<Vec<u32>> = (coloring.offsets.windows(2))
+        .map(|w| coloring.order[w[0] as usize..w[1] as usize].to_vec())
+        .collect();
+    let mut cg = Pcg {
+        p: vec![Vec4::ZERO; n],
+        correction,
+        scalars: PcgScalars::default(),
+    };
+    for first in [true, false] {
+        for &op in v_cycle {
+            check_level_op(&mut g, &mut lv, (&mg, &fine), op, step);
+        }
+        check_pcg(&mut g, &mut lv, &mg, &mut cg, first, step);
+    }
+    let mut correction = cg.correction;
+
+    check_line_search(&mut g, &mut c, &mut correction);
+    check_force_residual(&mut g, &c);
+}
+
+fn check_contact_planes(g: &mut GpuSolver, c: &mut Case) {
+    let bodies = c.prep.params.num_bodies as usize;
+    if bodies == 0 {
+        return;
+    }
+    g.run_solve_ops(&[SolveOp::ContactPlanes], &c.step).unwrap();
+    let sdfs: Vec<&[f32]> = (c.prep.model.colliders.iter())
+        .map(|k| &k.sdf.values[..])
+        .collect();
+    let (mut planes, mut lambdas) = (c.planes.clone(), c.lambdas.clone());
+    c.with(|s| cpu::contact_planes(s, &c.x, &sdfs, &mut planes, &mut lambdas));
+    (c.planes, c.lambdas) = (planes, lambdas);
+    let got = g.solve_array(SolveArray::Planes).unwrap();
+    // Far from a body the plane is (0, SDF_FAR) on both.
+    let near: Vec<(Vec4, Vec4)> = (got.iter().zip(&c.planes))
+        .filter(|(_, p)| p.w < 1.0)
+        .map(|(a, b)| (*a, *b))
+        .collect();
+    assert!((got.iter().zip(&c.planes)).all(|(a, b)| b.w < 1.0 || a == b));
+    // The vertex's world position and its body-frame point are a few f32 operations on
+    // coordinates of up to ~1.5 m (FMA may round one differently: 2ε·1.5 m ≈ 2e-7 m); that moves
+    // the point within its 5 mm SDF cell by a fraction 4e-5 of the cell, so the trilinear
+    // gradient (which changes by at most ~1 across a cell near a corner) by 4e-5, and φ by
+    // 2e-7 m plus the interpolation's own rounding (a few ε of the node values, ≲ 1 m).
+    // Bounds: 10× those.
+    let cell_shift = 2.0 * EPS * 1.5 / 5e-3;
+    let dn = (near.iter())
+        .map(|(a, b)| (a.truncate() - b.truncate()).abs().max_element())
+        .fold(0.0f32, f32::max);
+    let dc = near
+        .iter()
+        .map(|(a, b)| (a.w - b.w).abs())
+        .fold(0.0f32, f32::max);
+    within("contact_planes normals", dn, 10.0 * cell_shift);
+    within(
+        "contact_planes c (m)",
+        dc,
+        10.0 * (2.0 * EPS * 1.5 + 8.0 * EPS),
+    );
+    // λ = max(−n̂·f, 0) with f the force without contact: the normal's difference times |f|,
+    // plus f's own rounding (see check_assemble).
+    let f_max = c.with(|s| {
+        let free = drapekit::model::layout::SimParams {
+            num_bodies: 0,
+            ..*s.params
+        };
+        let s = Implicit {
+            params: &free,
+            ..*s
+        };
+        (0..c.prep.model.len())
+            .map(|i| {
+                s.vertex_system(i, &c.x, None, &mut |_, _| {})
+                    .force
+                    .length()
+            })
+            .fold(0.0f32, f32::max)
+    });
+    let force_bound = 16.0 * EPS * c.stiffest() * c.longest_edge();
+    let dl = max_abs_diff(&g.solve_array(SolveArray::Lambdas).unwrap(), &c.lambdas);
+    let touching = c.lambdas.iter().filter(|l| l.max_element() > 0.0).count();
+    eprintln!(
+        "  {} vertices near a body, {touching} with a normal force",
+        near.len()
+    );
+    within(
+        "contact_planes λ (N)",
+        dl,
+        10.0 * cell_shift * f_max + force_bound,
+    );
+    g.set_solve_array(SolveArray::Planes, &c.planes).unwrap();
+    g.set_solve_array(SolveArray::Lambdas, &c.lambdas).unwrap();
+}
+
+fn check_sweep(g: &mut GpuSolver, c: &mut Case) {
+    // One sweep over every colour (in place on both).
+    let coloring = c.prep.model.vertex_coloring();
+    let mut x = c.x.clone();
+    let mut steps = [0.0f32];
+    for sweep in coloring.sweeps(1) {
+        c.with(|s| cpu::vbd_solve(s, &sweep, &coloring.order, &mut x, &mut steps));
+    }
+    g.run_solve_ops(&[SolveOp::Sweep { iteration: 0 }], &c.step)
+        .unwrap();
+    let moved = max_abs_diff(&x, &c.x);
+    assert!(moved > 1e-3, "the sweep moved nothing");
+    // A vertex's Newton step is H⁻¹f; f's terms carry the rounding of the lengths they cancel
+    // (|e| − L with |e| ≤ the longest edge ℓ: ε·ℓ relative to the stiffness that H⁻¹ divides
+    // out), a few roundings per term: ≲ 16ε·ℓ per step. Later colours read the earlier ones'
+    // new positions, and a Gauss–Seidel sweep passes such differences on undamped at most (H is
+    // diagonally dominant), so they add up over the colours.
+    let bound = 16.0 * EPS * c.longest_edge() * coloring.colors() as f32;
+    let got = g.solve_array(SolveArray::Displacement).unwrap();
+    c.x = x;
+    within("vbd_solve D (m)", max_abs_diff(&got, &c.x), bound);
+    g.set_solve_array(SolveArray::Displacement, &c.x).unwrap();
+}
+
+fn check_assemble(g: &mut GpuSolver, c: &Case, mg: &Multigrid) -> (Vec<Vec4>, Vec<Mat3>) {
+    g.run_solve_ops(&[SolveOp::Assemble], &c.step).unwrap();
+    let n = c.prep.model.len();
+    let mut force = vec![Vec4::ZERO; n];
+    let mut blocks = vec![Mat3::ZERO; mg.fine.blocks()];
+    let eb = &mg.element_blocks;
+    c.with(|s| cpu::assemble(s, &c.x, &mg.fine, eb, &mut force, &mut blocks));
+    // A force sums ≲ 40 terms, each at most the vertex's stiffness times the longest edge ℓ
+    // (a spring's k·(|e| − L), contact's k_c·depth), each carrying a rounding or two of that:
+    // 16ε·H·ℓ, as in check_sweep. A block sums ≲ 40 element blocks, each at most the largest
+    // stiffness H, and the contact filter's products add a few roundings: 16ε·H.
+    let stiffest = c
+        .stiffest()
+        .max(mat_max(&blocks.iter().fold(Mat3::ZERO, |a, b| {
+            Mat3::from_cols(
+                a.x_axis.max(b.x_axis.abs()),
+                a.y_axis.max(b.y_axis.abs()),
+                a.z_axis.max(b.z_axis.abs()),
+            )
+        })));
+    let got_force = g.solve_array(SolveArray::Force).unwrap();
+    let bound = 16.0 * EPS * stiffest * c.longest_edge();
+    within(
+        "assemble force (N)",
+        max_abs_diff(&got_force, &force),
+        bound,
+    );
+    let got_blocks = g.solve_blocks(0).unwrap();
+    within(
+        "assemble blocks (N/m)",
+        block_diff(&got_blocks, &blocks),
+        16.0 * EPS * stiffest,
+    );
+    // Both go on from the CPU's.
+    g.set_solve_blocks(0, &blocks).unwrap();
+    (force, blocks)
+}
+
+/// The in-order total of per-workgroup partials (x, y, z: one trial step each).
+fn total(partials: &[Vec4]) -> Vec4 {
+    partials.iter().fold(Vec4::ZERO, |a, p| a + *p)
+}
+
+fn check_line_search(g: &mut GpuSolver, c: &mut Case, correction: &mut [Vec4]) {
+    let n = c.prep.model.len();
+    let step = c.step;
+    // The correction filter: c plus (or less) multiples of the normal that a few roundings of
+    // |c| and of the distances to the layer (|φ|, ≲ the near planes' c + n̂·D) bound.
+    let near_phi = (0..c.planes.len())
+        .filter(|&k| c.planes[k].w < 1.0)
+        .map(|k| (c.planes[k].w + c.planes[k].truncate().dot(c.x[k % n].truncate())).abs())
+        .fold(0.0f32, f32::max);
+    g.set_solve_array(SolveArray::Correction, correction)
+        .unwrap();
+    g.run_solve_ops(&[SolveOp::CorrectionFilter], &step)
+        .unwrap();
+    let before = max_norm(correction);
+    c.with(|s| cpu::correction_filter(s, &c.x, correction));
+    let got = g.solve_array(SolveArray::Correction).unwrap();
+    within(
+        "correction_filter",
+        max_abs_diff(&got, correction),
+        8.0 * EPS * (before + near_phi),
+    );
+    g.set_solve_array(SolveArray::Correction, correction)
+        .unwrap();
+
+    // The change of G at each trial step, summed over the vertices: compare the totals.
+    g.run_solve_ops(&[SolveOp::LineEnergy], &step).unwrap();
+    let mut partials = vec![Vec4::ZERO; n.div_ceil(64)];
+    c.with(|s| cpu::line_energy(s, &c.x, correction, &mut partials));
+    let got = g.solve_array(SolveArray::Partials).unwrap();
+    let diff = (total(&got[..partials.len()]) - total(&partials))
+        .abs()
+        .max_element();
+    within("line_energy ΔG (J)", diff, line_energy_bound(c, correction));
+
+    // The line search from the CPU's partials: the same additions in the same order, the
+    // same comparisons: the same step.
+    g.set_solve_array(SolveArray::Partials, &partials).unwrap();
+    g.run_solve_ops(&[SolveOp::LineSearch], &step).unwrap();
+    let alpha = cpu::line_search(&partials);
+    assert_eq!(g.solve_scalars().unwrap().line_alpha, alpha, "line_search");
+    eprintln!(
+        "  line_search: α = {alpha} on both (ΔG {:?})",
+        total(&partials)
+    );
+
+    // D += α·c with α = ½ (whatever the search chose): a rounding of |D| + |α·c|, FMA or not.
+    let half = SolveScalars {
+        line_alpha: 0.5,
+        ..Default::default()
+    };
+    g.set_solve_scalars(half).unwrap();
+    g.run_solve_ops(&[SolveOp::ApplyCorrection], &step).unwrap();
+    let mut x = c.x.clone();
+    cpu::apply_correction(0.5, correction, &mut x);
+    let bound = 2.0 * EPS * (max_norm(&c.x) + 0.5 * max_norm(correction));
+    let got = g.solve_array(SolveArray::Displacement).unwrap();
+    within("apply_correction D (m)", max_abs_diff(&got, &x), bound);
+    assert!(max_abs_diff(&x, &c.x) > 0.0, "the correction moved nothing");
+    c.x = x;
+    g.set_solve_array(SolveArray::Displacement, &c.x).unwrap();
+}
+
+/// The scale of the terms the line energy sums: per vertex, the magnitude of the change of its
+/// own terms (inertia, air, contact, friction) and of each kind of element it owns, each from
+/// the CPU twin with only those elements; and each hinge's energy w₀·ψ, whose difference at two
+/// angles cancels (|ψ| ≤ 2 + π·|sin(θ₀/2)|, evaluated four times). A term rounds a few times
+/// relative to its own size, and ~10⁴ of them are added: 32ε of the total magnitude.
+fn line_energy_bound(c: &Case, correction: &[Vec4]) -> f32 {
+    let n = c.prep.model.len();
+    let all = c.elements.view();
+    let zeros = vec![0u32; n + 1];
+    let none = VbdElements {
+        springs: (&zeros, &[]),
+        hinges: None,
+        seams: None,
+    };
+    let springs = VbdElements {
+        springs: all.springs,
+        hinges: None,
+        seams: None,
+    };
+    let hinges = VbdElements {
+        springs: (&zeros, &[]),
+        hinges: all.hinges,
+        seams: None,
+    };
+    let seams = VbdElements {
+        springs: (&zeros, &[]),
+        hinges: None,
+        seams: all.seams,
+    };
+    let change = |el: &VbdElements, i: usize| {
+        c.with_elements(Some(el), |s| {
+            Vec3::from(s.energy_change(i, &c.x, correction, cpu::LINE_ALPHAS))
+        })
+    };
+    let mut magnitude = 0.0f32;
+    for i in 0..n {
+        let own = change(&none, i);
+        magnitude += own.abs().max_element();
+        for el in [&springs, &hinges, &seams] {
+            magnitude += (change(el, i) - own).abs().max_element();
+        }
+    }
+    let psi = (c.prep.model.hinges.iter())
+        .map(|h| h.rest_weight * (2.0 + std::f32::consts::PI * h.rest_sin_half.abs()))
+        .sum::<f32>();
+    32.0 * EPS * (magnitude + 4.0 * psi)
+}
+
+fn check_force_residual(g: &mut GpuSolver, c: &Case) {
+    g.run_solve_ops(&[SolveOp::ForceResidual], &c.step).unwrap();
+    let control = g.solve_control().unwrap();
+    let mut partials = vec![Vec4::ZERO; c.prep.model.len().div_ceil(64)];
+    c.with(|s| cpu::force_residual(s, &c.x, &mut partials));
+    let (largest, rms) = cpu::reduce_residual(&partials);
+    // |fᵢ|/(mᵢ·g): a force's difference (check_assemble's bound) over the lightest particle's
+    // weight; the RMS differs by at most the largest difference, plus its sum's rounding.
+    let g_mag = cpu::residual_gravity(c.prep.params.gravity);
+    let lightest = c.state.positions.iter().map(|p| p.w).fold(0.0f32, f32::max);
+    let df = 16.0 * EPS * c.stiffest() * c.longest_edge() * lightest / g_mag;
+    within(
+        "force_residual largest",
+        (control.residual_max - largest).abs(),
+        df + 4.0 * EPS * largest,
+    );
+    let groups = partials.len() as f32;
+    within(
+        "force_residual RMS",
+        (control.residual_rms - rms).abs(),
+        df + (groups + 9.0) * EPS * rms,
+    );
+    assert_eq!(control.done, 0, "no tolerance check ran");
+}

@@ -1,0 +1,212 @@
+//! Runs report their own health: the result block, warnings for implausible inputs and for
+//! results that went wrong (open seams, the body showing through, no rest), `--strict`, and
+//! `--frames 0`.
+
+mod common;
+
+use drapekit::scene::Scene;
+use drapekit::sim::prepare;
+use glam::Vec4;
+use std::path::{Path, PathBuf};
+
+fn out_dir(name: &str) -> PathBuf {
+    common::out_dir("health", name)
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+/// `fixtures/scenes/NAME` with `edits` (text replacements) applied, written into `dir` with its
+/// relative paths made absolute.
+fn edited_scene(dir: &Path, name: &str, edits: &[(&str, &str)]) -> PathBuf {
+    let mut text = std::fs::read_to_string(common::fixture(&format!("scenes/{name}"))).unwrap();
+    let fixtures = common::fixture("");
+    text = text.replace("\"../", &format!("\"{}/", fixtures.display()));
+    for (from, to) in edits {
+        assert!(text.contains(from), "{name} has no {from:?}");
+        text = text.replace(from, to);
+    }
+    std::fs::create_dir_all(dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// The cotton T-shirt at 5 cm spacing on a 1 cm distance field: seconds, not minutes.
+fn coarse_shirt(dir: &Path) -> PathBuf {
+    edited_scene(
+        dir,
+        "tshirt_drape_cotton.toml",
+        &[
+            ("particle_distance_m = 0.02", "particle_distance_m = 0.05"),
+            ("sdf_resolution_m = 0.005", "sdf_resolution_m = 0.01"),
+        ],
+    )
+}
+
+fn run(scene: &Path, out: &Path, frames: &str, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "run",
+        scene.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--frames",
+        frames,
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ];
+    args.extend(extra);
+    common::drapekit(&args)
+}
+
+#[test]
+fn implausible_fabric_values_are_warned_and_strict_refuses_them_before_the_run() {
+    // The slips a new user made: density in g/m², stretch in kN/m.
+    let dir = out_dir("fabric");
+    let scene = edited_scene(
+        &dir,
+        "hanging_cloth.toml",
+        &[
+            ("density_kg_m2 = 0.15", "density_kg_m2 = 220"),
+            ("stretch_stiffness_n_m = 300.0", "stretch_stiffness_n_m = 3"),
+        ],
+    );
+    let out = dir.join("out");
+    let r = run(&scene, &out, "1", &[]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(
+        stdout.contains("result:") && stdout.contains("  warnings 2"),
+        "{stdout}"
+    );
+    let warnings = summary(&out)["warnings"].clone();
+    let text = warnings.to_string();
+    assert!(
+        text.contains("fabric.density_kg_m2: 220 kg/m² is above any real garment fabric's"),
+        "{text}"
+    );
+    assert!(
+        text.contains("write 0.22") && text.contains("write 3000"),
+        "{text}"
+    );
+    // --strict: exit 5 and nothing run (no new summary).
+    let strict = dir.join("strict");
+    let r = run(&scene, &strict, "1", &["--strict"]);
+    assert_eq!(
+        r.status.code(),
+        Some(5),
+        "{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    assert!(String::from_utf8_lossy(&r.stderr).contains("nothing was run"));
+    assert!(!strict.join("summary.json").exists());
+}
+
+#[test]
+fn a_body_in_centimetres_is_named_with_the_unit_to_use() {
+    // The mannequin scaled to centimetres but read as metres: 170 m tall. Its distance field
+    // is refused; the message says which unit the mesh is in.
+    let dir = out_dir("units");
+    let mesh = std::fs::read_to_string(common::fixture("bodies/mannequin.obj")).unwrap();
+    let cm: String = (mesh.lines())
+        .map(|l| match l.strip_prefix("v ") {
+            Some(v) => {
+                let c: Vec<f64> = v.split_whitespace().map(|x| x.parse().unwrap()).collect();
+                format!("v {} {} {}\n", 100.0 * c[0], 100.0 * c[1], 100.0 * c[2])
+            }
+            None => format!("{l}\n"),
+        })
+        .collect();
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("cm.obj"), cm).unwrap();
+    let body = dir.join("cm.obj");
+    let scene = edited_scene(
+        &dir,
+        "tshirt_drape_cotton.toml",
+        &[(
+            &format!("\"{}/bodies/mannequin.obj\"", common::fixture("").display()),
+            &format!("\"{}\"", body.display()),
+        )],
+    );
+    let r = run(&scene, &dir.join("out"), "1", &[]);
+    assert_eq!(r.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("units = \"cm\""), "{err}");
+    assert!(
+        err.contains("warning: ") && err.contains("body.units"),
+        "{err}"
+    );
+}
+
+#[test]
+fn open_seams_are_a_warning_and_strict_fails_after_writing_the_run() {
+    let dir = out_dir("seams");
+    let scene = coarse_shirt(&dir);
+    // Three frames: the seams are drawn shut over 0.6 s, so they are still open.
+    let out = dir.join("out");
+    let r = run(&scene, &out, "3", &["--strict"]);
+    assert_eq!(
+        r.status.code(),
+        Some(5),
+        "{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(stdout.contains("  seams    0 of 12 closed"), "{stdout}");
+    let s = summary(&out);
+    let text = s["warnings"].to_string();
+    assert!(
+        text.contains("12 of 12 seams are still open at the last frame"),
+        "{text}"
+    );
+    assert!(
+        out.join("frame_0003.obj").is_file(),
+        "the run's files are written"
+    );
+}
+
+#[test]
+fn the_body_shows_through_a_sheet_cut_by_it_and_not_one_above_it() {
+    // The sphere scene's sheet moved down through the sphere: triangles inside it. Its start
+    // position, above the sphere: none.
+    let scene = Scene::load(&common::fixture("scenes/drape_sphere.toml")).unwrap();
+    let prep = prepare(&scene).unwrap();
+    let above: Vec<Vec4> = prep.model.positions.iter().map(|p| p.extend(1.0)).collect();
+    let clear = drapekit::health::show_through(&prep, &above, 0).unwrap();
+    assert_eq!((clear.particles, clear.triangles), (0, 0));
+    let body = &prep.model.colliders[0].body.mesh.positions;
+    let centre = body.iter().copied().sum::<glam::Vec3>() / body.len() as f32;
+    let top = prep
+        .model
+        .positions
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::MIN, f32::max);
+    let cut: Vec<Vec4> = (prep.model.positions.iter())
+        .map(|p| (*p - glam::Vec3::Y * (top - centre.y)).extend(1.0))
+        .collect();
+    let through = drapekit::health::show_through(&prep, &cut, 0).unwrap();
+    assert!(
+        through.triangles > 0 && through.particles > 0,
+        "{through:?}"
+    );
+    // The sheet through the centre: the deepest point is the sphere's radius deep, within the
+    // mesh's facets (the sphere is a polyhedron inside the true sphere).
+    let radius = body.iter().map(|p| p.distance(centre)).fold(0.0, f32::max);
+    assert!(
+        through.deepest_m <= radius && through.deepest_m > 0.8 * radius,
+        "{through:?}"
+    );
+}
+
+#[test]
+fn zero_frames_are_refused() {
+    let scene = common::fixture("scenes/hanging_cloth.toml");
+    let out = out_dir("zero");
+    let r = run(&scene, &out, "0", &[]);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("0 frames simulate nothing"));
+    assert!(!out.exists());
+}
