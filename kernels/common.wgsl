@@ -47,8 +47,8 @@ struct BodyParams {
     normal_loss: f32,            // 1, fraction of outward normal relative speed lost in contact
     tangential_loss: f32,        // 1, fraction of tangential relative speed lost in contact
     friction_slip_speed: f32,    // m/s, implicit Euler's friction is static (smoothed) below this slip speed
-    _pad0: u32,
-    _pad1: u32,
+    parts: u32,                  // a deforming body's collision parts (0: rigid), see deformed_body.wgsl
+    first_part: u32,             // its first part in SubstepParams.parts
     _pad2: u32,
 }
 
@@ -71,7 +71,12 @@ struct SubstepParams {
     _pad0: u32,
     _pad1: u32,
     bodies: array<BodyPose, MAX_BODIES>,
+    parts: array<BodyPose, MAX_PARTS>, // deforming bodies' collision parts, rest pose to world
 }
+
+// Most collision parts of all deforming bodies together: every substep's uniform carries each
+// one's pose.
+const MAX_PARTS: u32 = 24u;
 
 // One incident spring seen from a particle (CSR entry): the spring is stored once per end.
 // Uploaded as one rgba32uint texel, floats as their bits.

@@ -157,6 +157,14 @@ impl TriMesh {
     /// wherever its texture coordinate or normal changes (and between objects), which would
     /// make a closed body look open along every UV seam.
     pub fn weld_coincident(&mut self) -> usize {
+        let before = self.positions.len();
+        self.weld_map();
+        before - self.positions.len()
+    }
+
+    /// `weld_coincident`, returning for each old vertex its new index (what per-vertex data
+    /// such as skin weights needs to follow the weld).
+    pub fn weld_map(&mut self) -> Vec<u32> {
         let mut first: HashMap<[u32; 3], u32> = HashMap::with_capacity(self.positions.len());
         let mut positions = Vec::with_capacity(self.positions.len());
         let remap: Vec<u32> = self
@@ -171,12 +179,11 @@ impl TriMesh {
                 })
             })
             .collect();
-        let merged = self.positions.len() - positions.len();
         for t in &mut self.triangles {
             *t = t.map(|i| remap[i as usize]);
         }
         self.positions = positions;
-        merged
+        remap
     }
 
     /// Unique edges with their opposite vertices, sorted by endpoints for determinism.

@@ -89,6 +89,24 @@ pub fn body_distances(
         .collect()
 }
 
+/// Each particle's signed distance (negative inside) to a deforming body's exact mesh as it is
+/// deformed at time `t`, in m (the exact queries rebuilt over the deformed vertices).
+pub fn deformed_distances(
+    collider: &crate::body::Collider,
+    t: f32,
+    positions: &[Vec4],
+) -> Result<Vec<f32>, String> {
+    let mesh = crate::mesh::TriMesh {
+        positions: collider.world_positions(t),
+        triangles: collider.body.mesh.triangles.clone(),
+    };
+    let exact = crate::body::exact::ExactBody::new(&mesh)?;
+    Ok(positions
+        .iter()
+        .map(|p| exact.query(p.truncate()).0)
+        .collect())
+}
+
 /// The deepest any particle lies inside the body, in m (0 when none is inside).
 pub fn max_penetration(distances: &[f32]) -> f32 {
     distances.iter().map(|d| -d).fold(0.0, f32::max)

@@ -131,6 +131,9 @@ pub struct Summary {
     pub body_surface_speed_m_s: Option<f32>,
     /// Body surface travel per substep in m; at most the thickness unless a warning says so.
     pub body_surface_step_m: Option<f32>,
+    /// The (first) deforming body's motion: its source, timing and the deepest particle inside
+    /// its exact deformed mesh at each output frame; null without one.
+    pub body_motion: Option<crate::body::deform::MotionReport>,
     /// Particles held by `attach_labels` at the start.
     pub attached_particles: usize,
     /// The frame after which they were released.

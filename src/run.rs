@@ -251,6 +251,7 @@ fn run_scene_from(
     if let Some(ctx) = &device {
         // Refused from the scene alone, before anything is built or baked.
         crate::model::budget::check_gpu_textures(&scene, ctx.max_texels())?;
+        crate::model::budget::check_gpu_bodies(&scene)?;
         crate::model::budget::check_sdf_textures(&scene, ctx.max_texels())?;
     }
     let prep = prepare(&scene)?;
@@ -554,6 +555,9 @@ fn run_scene_from(
             .collect(),
         body_surface_speed_m_s: first_body.map(|_| prep.body_surface_speed),
         body_surface_step_m: first_body.map(|_| prep.body_surface_speed * prep.params.dt),
+        body_motion: (prep.model.colliders.iter())
+            .find_map(|c| c.deformed.as_ref())
+            .map(|d| d.deformation.report(stats.deformed_penetration_m.clone())),
         attached_particles: prep.attached.len(),
         released_after_frame: stats.released_after_frame,
         finite: stats.finite,

@@ -80,8 +80,8 @@ fn body_params_layout() {
                 "friction_slip_speed",
                 offset_of!(BodyParams, friction_slip_speed),
             ),
-            ("_pad0", offset_of!(BodyParams, _pad0)),
-            ("_pad1", offset_of!(BodyParams, _pad1)),
+            ("parts", offset_of!(BodyParams, parts)),
+            ("first_part", offset_of!(BodyParams, first_part)),
             ("_pad2", offset_of!(BodyParams, _pad2)),
         ],
     );
@@ -115,6 +115,7 @@ fn substep_params_layout() {
             ("_pad0", offset_of!(SubstepParams, _pad0)),
             ("_pad1", offset_of!(SubstepParams, _pad1)),
             ("bodies", offset_of!(SubstepParams, bodies)),
+            ("parts", offset_of!(SubstepParams, parts)),
         ],
     );
 }

@@ -33,6 +33,14 @@ impl ExactBody {
         v * vector + t * 3 * 4 + (v + 3 * t) * vector + self.shape.bvh().total_memory_size()
     }
 
+    /// `query`, with the index of the triangle that holds the nearest point.
+    pub fn query_triangle(&self, p: Vec3) -> (f32, Vec3, u32) {
+        use parry3d::query::PointQueryWithLocation;
+        let (proj, (triangle, _)) = self.shape.project_local_point_and_get_location(p, false);
+        let d = p.distance(proj.point);
+        (if proj.is_inside { -d } else { d }, proj.point, triangle)
+    }
+
     /// Signed distance to the surface (negative inside) and the nearest surface point.
     pub fn query(&self, p: Vec3) -> (f32, Vec3) {
         let proj = self.shape.project_local_point(p, false);

@@ -2,19 +2,31 @@
 //! generated (sphere, box, capsule), with a baked signed distance field and rigid motion.
 
 pub mod bvh;
+pub mod cache;
+pub mod deform;
+pub mod deformed_sdf;
 pub mod edges;
 pub mod exact;
+pub mod fit;
+pub mod gltf_read;
+pub mod gltf_write;
 pub mod motion;
+pub mod motions;
+pub mod rig;
 pub mod sdf;
 pub mod shapes;
 pub mod simplify;
 pub mod size;
+pub mod skin;
 
 use crate::error::InputError;
 use crate::mesh::TriMesh;
 use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
+
+/// Linear RGB of a body in previews and exported files (the previews' `BODY`).
+pub const BODY_COLOR: [f32; 3] = [0.62, 0.60, 0.58];
 
 /// How the CPU path finds contacts with the body (the GPU path always uses the SDF).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -69,7 +81,8 @@ impl Strategy {
 pub struct Collider {
     /// The body in its own frame.
     pub body: Body,
-    /// Its baked distance field.
+    /// Its baked distance field. A deforming body's holds its rest pose's nodes followed by
+    /// the words its collision reads after them (`deformed_sdf`), as the kernels' SDF texture.
     pub sdf: sdf::Sdf,
     /// Its exact point queries.
     pub exact: exact::ExactBody,
@@ -83,9 +96,39 @@ pub struct Collider {
     pub edges: Option<edges::BodyEdges>,
     /// How the SDF was obtained.
     pub bake: sdf::BakeReport,
+    /// A deforming body's motion and the words its collision reads after the SDF (`None`: the
+    /// body is rigid; its SDF is then of the rest pose).
+    pub deformed: Option<DeformedBody>,
+}
+
+/// What a deforming body adds to its collider.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DeformedBody {
+    /// Its motion.
+    pub deformation: deform::Deformation,
+    /// How many collision parts it has.
+    pub parts: usize,
 }
 
 impl Collider {
+    /// Whether the body moves or deforms at some time.
+    pub fn moves(&self) -> bool {
+        self.deformed.is_some() || self.motion.moves()
+    }
+
+    /// The body's vertices in the world at time `t`: posed rigidly, or deformed.
+    pub fn world_positions(&self, t: f32) -> Vec<Vec3> {
+        match &self.deformed {
+            Some(d) => d.deformation.positions_at(t),
+            None => {
+                let pose = self.motion.at(t);
+                (self.body.mesh.positions.iter())
+                    .map(|p| pose.rotation * *p + pose.translation)
+                    .collect()
+            }
+        }
+    }
+
     /// Signed distance (negative inside) and nearest surface point by the CPU strategy (the SDF
     /// strategy has no nearest point; use `sdf.sample`).
     pub fn query(&self, p: Vec3) -> (f32, Vec3) {

@@ -1,6 +1,7 @@
 //! CPU twin of `kernels/collide_body.wgsl`, plus the same response driven by other contact
 //! queries (the CPU collision strategies).
 
+use super::deformed_body::deformed_sample;
 use crate::body::sdf::sdf_sample;
 use crate::model::layout::{BodyParams, BodyPose, SimParams, SubstepParams};
 use glam::{Vec3, Vec4};
@@ -49,11 +50,43 @@ pub fn collide_particle(
         return (x, v);
     }
     let n = safe_normalize(to_world(pose, s.truncate()));
+    respond(body, x, v, s.w, n, |p| {
+        body_velocity_at(pose, p - v3(pose.translation))
+    })
+}
+
+/// A deforming body's response to a particle at `x` with velocity `v`: its parts' poses are
+/// `parts` (from its first), its words `words` (`cpu::deformed_sample`).
+pub fn collide_deformed(
+    body: &BodyParams,
+    parts: &[BodyPose],
+    words: &[f32],
+    x: Vec3,
+    v: Vec3,
+) -> (Vec3, Vec3) {
+    let s = deformed_sample(body, parts, words, x);
+    if s.phi >= body.thickness {
+        return (x, v);
+    }
+    respond(body, x, v, s.phi, s.normal, |p| s.velocity_at(p))
+}
+
+/// The response to a contact at distance `phi` along unit normal `n` (zero: none): the particle
+/// moves out to the thickness, its inward velocity relative to the surface (`v_body` at the
+/// new position) is cancelled and Coulomb friction acts on the rest.
+fn respond(
+    body: &BodyParams,
+    x: Vec3,
+    v: Vec3,
+    phi: f32,
+    n: Vec3,
+    v_body: impl Fn(Vec3) -> Vec3,
+) -> (Vec3, Vec3) {
     if n.dot(n) == 0.0 {
         return (x, v);
     }
-    let x = x + (body.thickness - s.w) * n;
-    let v_body = body_velocity_at(pose, x - v3(pose.translation));
+    let x = x + (body.thickness - phi) * n;
+    let v_body = v_body(x);
     let v_rel = v - v_body;
     let mut vn = v_rel.dot(n);
     let mut vt = v_rel - vn * n;
@@ -82,14 +115,17 @@ fn safe_normalize(v: Vec3) -> Vec3 {
 
 /// Collides every particle with the first `bodies` bodies, in scene order (in place: each
 /// particle reads and writes only its own state, so particles run in parallel). `query(b, p)`
-/// gives body b's φ (w) and ∇φ (xyz) at body-frame point p: its SDF sampled as the kernel
-/// samples it (`sample_body_sdf`), or another CPU strategy's answer.
+/// gives rigid body b's φ (w) and ∇φ (xyz) at body-frame point p: its SDF sampled as the kernel
+/// samples it (`sample_body_sdf`), or another CPU strategy's answer. A deforming body (one
+/// with parts) is sampled from its words in `words`, as the kernel does.
+#[allow(clippy::too_many_arguments)]
 pub fn collide_body(
     params: &SimParams,
     step: &SubstepParams,
     pos: &mut [Vec4],
     vel: &mut [Vec4],
     bodies: usize,
+    words: &[&[f32]],
     query: impl Fn(usize, Vec3) -> Vec4 + Sync,
 ) {
     let n = params.num_particles as usize;
@@ -99,9 +135,14 @@ pub fn collide_body(
             return;
         }
         let (mut x, mut v) = (pos.truncate(), vel.truncate());
-        for b in 0..bodies {
+        for (b, body_words) in words.iter().enumerate().take(bodies) {
             let body = &params.bodies[b];
-            (x, v) = collide_particle(body, &step.bodies[b], x, v, |p| query(b, p));
+            (x, v) = if body.parts > 0 {
+                let parts = &step.parts[body.first_part as usize..];
+                collide_deformed(body, parts, body_words, x, v)
+            } else {
+                collide_particle(body, &step.bodies[b], x, v, |p| query(b, p))
+            };
         }
         *pos = x.extend(pos.w);
         *vel = v.extend(0.0);

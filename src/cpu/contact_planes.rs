@@ -1,6 +1,7 @@
 //! CPU twin of `kernels/contact_planes.wgsl`.
 
 use super::collide_body::{sample_body_sdf, to_body_frame, to_world};
+use super::deformed_body::deformed_sample;
 use super::implicit_terms::{Implicit, CONTACT_SLACK_FRACTION};
 use crate::model::layout::SimParams;
 use glam::{Vec3, Vec4};
@@ -47,13 +48,20 @@ pub fn contact_planes(
             let mut load: Option<Vec3> = None;
             for b in 0..bodies {
                 let (pose, body) = (&s.step.bodies[b], &p.bodies[b]);
-                let (xb, _) = to_body_frame(pose, x);
-                let sample = sample_body_sdf(body, sdfs[b], xb);
-                let g = to_world(pose, sample.truncate());
-                let len = g.length();
-                let normal = if len > 1e-12 { g / len } else { Vec3::ZERO };
-                out[b] = normal.extend(sample.w - normal.dot(d0));
-                if sample.w < body.thickness * (1.0 + CONTACT_SLACK_FRACTION) {
+                let (phi, normal) = if body.parts > 0 {
+                    // A deforming body: its parts posed at the substep's end.
+                    let parts = &s.step.parts[body.first_part as usize..];
+                    let d = deformed_sample(body, parts, sdfs[b], x);
+                    (d.phi, d.normal)
+                } else {
+                    let (xb, _) = to_body_frame(pose, x);
+                    let sample = sample_body_sdf(body, sdfs[b], xb);
+                    let g = to_world(pose, sample.truncate());
+                    let len = g.length();
+                    (sample.w, if len > 1e-12 { g / len } else { Vec3::ZERO })
+                };
+                out[b] = normal.extend(phi - normal.dot(d0));
+                if phi < body.thickness * (1.0 + CONTACT_SLACK_FRACTION) {
                     let f = *load.get_or_insert_with(|| {
                         without_contact
                             .vertex_system(i, guess, None, &mut |_, _| {})

@@ -12,6 +12,7 @@ mod bending_forces;
 mod coarse_operator;
 mod collide_body;
 mod contact_planes;
+mod deformed_body;
 mod force_residual;
 mod hash_clear;
 mod hash_count;
@@ -40,9 +41,10 @@ pub use assemble::assemble;
 pub use bending_forces::bending_forces;
 pub use coarse_operator::coarse_operator;
 pub use collide_body::{
-    collide_body, collide_edge, collide_edges, collide_particle, to_body_frame,
+    collide_body, collide_deformed, collide_edge, collide_edges, collide_particle, to_body_frame,
 };
 pub use contact_planes::contact_planes;
+pub use deformed_body::{closest_barycentric, deformed_sample, DeformedSample};
 pub use force_residual::{force_residual, reduce_residual, residual_gravity};
 pub use hash_clear::hash_clear;
 pub use hash_count::{hash_bucket, hash_cell_of, hash_count};
@@ -421,12 +423,14 @@ impl CpuSolver {
     fn collide(&mut self, step: &SubstepParams) {
         let p = &self.params;
         let colliders = &self.colliders[..(p.num_bodies as usize).min(self.colliders.len())];
+        let words: Vec<&[f32]> = colliders.iter().map(|c| &c.sdf.values[..]).collect();
         collide_body(
             p,
             step,
             &mut self.pos,
             &mut self.vel,
             colliders.len(),
+            &words,
             |b, x| strategy_query(&p.bodies[b], &colliders[b], x),
         );
         for (b, c) in colliders.iter().enumerate() {

@@ -68,6 +68,12 @@ pub fn estimate(scene: &Scene, prep: &Prepared, from: u32) -> OutputEstimate {
                 body.triangles.len() as u64,
                 false,
             );
+            if c.deformed.is_some() {
+                // A deforming body is written at every frame (body_NNNN.obj): no node
+                // animation holds its shape.
+                per_frame += bytes;
+                continue;
+            }
             // One OBJ either way; a moving body's motion goes to body.glb: its mesh once
             // (positions and normals, 24 bytes a vertex; 12 a triangle) and a time, a rotation
             // and a translation (32 bytes) a written frame.

@@ -117,16 +117,24 @@ impl<'a> Exporter<'a> {
             let text = obj::cloth_obj(&positions, self.triangles, self.uv, &self.groups);
             self.write(&name, text.as_bytes())?;
             names.push(name);
-            // Once, at the first written frame's pose: a moving body's motion is body.glb's
-            // node animation, not a mesh per frame.
-            for (i, c) in self.bodies.iter().enumerate().filter(|_| self.written == 0) {
-                let name = format!("{}.obj", self.body_name(i));
-                let world = self.body_world(c, frame);
-                self.write(
-                    &name,
-                    obj::body_obj(&world, &c.body.mesh.triangles).as_bytes(),
-                )?;
-                names.push(name);
+            // A rigid body once, at the first written frame's pose: a moving one's motion is
+            // body.glb's node animation. A deforming body at every frame: no node animation
+            // holds its shape.
+            for (i, c) in self.bodies.iter().enumerate() {
+                let stem = self.body_name(i);
+                let name = if c.deformed.is_some() {
+                    Some(format!("{stem}_{frame:04}.obj"))
+                } else {
+                    (self.written == 0).then(|| format!("{stem}.obj"))
+                };
+                if let Some(name) = name {
+                    let world = self.body_world(c, frame);
+                    self.write(
+                        &name,
+                        obj::body_obj(&world, &c.body.mesh.triangles).as_bytes(),
+                    )?;
+                    names.push(name);
+                }
             }
         }
         if self.settings.pc2 && self.written == 0 {
@@ -299,12 +307,9 @@ impl<'a> Exporter<'a> {
         }
     }
 
-    /// The body's vertices in world coordinates at `frame`'s time.
+    /// The body's vertices in world coordinates at `frame`'s time (deformed, if it deforms).
     fn body_world(&self, c: &Collider, frame: u32) -> Vec<Vec3> {
-        let pose = c.motion.at(frame as f32 * self.frame_dt);
-        (c.body.mesh.positions.iter())
-            .map(|p| pose.rotation * *p + pose.translation)
-            .collect()
+        c.world_positions(frame as f32 * self.frame_dt)
     }
 
     fn write(&self, name: &str, bytes: &[u8]) -> Result<(), Error> {

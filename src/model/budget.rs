@@ -249,6 +249,30 @@ pub fn check_gpu_textures(scene: &Scene, max_texels: u64) -> Result<(), InputErr
     ))
 }
 
+/// Refuses on the GPU path a scene with a deforming body (an animation or a vertex cache): its
+/// collision (inverse skinning into the rest pose's SDF, `cpu::deformed_sample`) has no kernel
+/// yet, and the rigid kernel would see only the rest pose.
+pub fn check_gpu_bodies(scene: &Scene) -> Result<(), InputError> {
+    let c = scene.checker();
+    match scene.bodies.iter().position(|b| b.deform.is_some()) {
+        None => Ok(()),
+        Some(i) => {
+            let b = &scene.bodies[i];
+            let key = match b.deform.as_ref().map(|d| &d.motion) {
+                Some(crate::scene::DeformMotion::Cache { .. }) => "cache",
+                _ => "animation",
+            };
+            Err(c.err(
+                &scene.body_table(i),
+                key,
+                "a deforming body collides on the CPU path only; the GPU kernels would see \
+                 only its rest pose",
+                "run with --backend cpu",
+            ))
+        }
+    }
+}
+
 /// Refuses, before any SDF is baked, bodies whose SDF nodes together would not fit the GPU's
 /// largest texture (the kernels read every body's nodes from one texture), naming the body
 /// with the most nodes and a spacing that fits (nodes fall with the cube of the spacing).

@@ -2,10 +2,11 @@
 //! under the memory cap), exact BVH and contact strategy.
 
 use crate::body::bvh::BodyBvh;
+use crate::body::deformed_sdf::DeformedGrid;
 use crate::body::edges::BodyEdges;
 use crate::body::exact::ExactBody;
 use crate::body::sdf::{grid_bytes, grid_for, Sdf};
-use crate::body::{shapes, Body, Collider};
+use crate::body::{shapes, Body, Collider, DeformedBody};
 use crate::check::Checker;
 use crate::error::InputError;
 use crate::scene::{BodySettings, BodySource};
@@ -17,6 +18,9 @@ const SHAPE_RINGS: u32 = 48;
 
 /// The body's triangles, checked (`table` names it in errors).
 pub fn build_body(settings: &BodySettings, c: &Checker, table: &str) -> Result<Body, InputError> {
+    if settings.deform.is_some() {
+        return super::deforming::build_deforming(settings, c, table).map(|(body, _)| body);
+    }
     let mesh = match &settings.source {
         BodySource::Mesh {
             path,
@@ -26,6 +30,9 @@ pub fn build_body(settings: &BodySettings, c: &Checker, table: &str) -> Result<B
         BodySource::Sphere { center, radius } => shapes::sphere(*center, *radius, SHAPE_RINGS),
         BodySource::Cuboid { center, half } => shapes::cuboid(*center, *half),
         BodySource::Mannequin { feet } => shapes::mannequin(*feet),
+        BodySource::Skinned { .. } => {
+            return super::deforming::build_deforming(settings, c, table).map(|(body, _)| body)
+        }
         BodySource::Capsule {
             center,
             radius,
@@ -62,7 +69,7 @@ pub(crate) fn build_collider(
     c: &Checker,
     table: &str,
 ) -> Result<Collider, InputError> {
-    let body = build_body(settings, c, table)?;
+    let (body, deformation) = super::deforming::build_deforming(settings, c, table)?;
     let (_, dims) = grid_for(&body, settings.sdf_resolution, settings.sdf_margin);
     let bytes = grid_bytes(dims);
     if bytes > settings.sdf_max_bytes {
@@ -85,7 +92,7 @@ pub(crate) fn build_collider(
         ));
     }
     let cache = settings.sdf_cache.then(cache_dir).flatten();
-    let (sdf, bake) = Sdf::bake_cached(
+    let (mut sdf, bake) = Sdf::bake_cached(
         &body,
         settings.sdf_resolution,
         settings.sdf_margin,
@@ -111,7 +118,37 @@ pub(crate) fn build_collider(
         .strategy
         .volume()
         .map(|kind| BodyBvh::new(&body.mesh, kind));
+    let deformed = match deformation {
+        None => None,
+        Some(d) => {
+            // A part's box reaches as far as the SDF's margin, plus 2 cm for the skin's
+            // blend near joints (a rest point there may map back off its part's own vertices).
+            let reach = settings.sdf_margin + 0.02;
+            let grid = DeformedGrid::build(
+                &body.mesh,
+                &d.part_influences,
+                d.part_count(),
+                &sdf,
+                reach,
+                cache.as_deref(),
+            )
+            .map_err(|e| {
+                c.err(
+                    table,
+                    "",
+                    format!("cannot bake the nearest triangles: {e}"),
+                    "check the body mesh",
+                )
+            })?;
+            sdf.values.extend_from_slice(&grid.words);
+            Some(DeformedBody {
+                deformation: d,
+                parts: grid.parts,
+            })
+        }
+    };
     Ok(Collider {
+        deformed,
         bvh,
         edges: settings.edge_contacts.then(|| BodyEdges::new(&body.mesh)),
         body,

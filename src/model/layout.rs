@@ -50,6 +50,9 @@ pub struct SimParams {
 /// Most collision bodies a scene may have, as `MAX_BODIES` in common.wgsl.
 pub use crate::scene::MAX_BODIES;
 
+/// Most collision parts of all deforming bodies together, as `MAX_PARTS` in common.wgsl.
+pub use crate::body::deform::MAX_PARTS;
+
 /// One collision body's SDF and contact response (WGSL `BodyParams`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -69,10 +72,12 @@ pub struct BodyParams {
     /// Implicit Euler's friction: slip speed relative to the body below which friction grows in
     /// proportion to the slip (static friction, smoothed), in m/s.
     pub friction_slip_speed: f32,
-    /// Padding.
-    pub _pad0: u32,
-    /// Padding.
-    pub _pad1: u32,
+    /// A deforming body's collision parts (0 for a rigid body): their poses are
+    /// `SubstepParams::parts[first_part..first_part + parts]`, and its words after the SDF
+    /// nodes are described in `body::deformed_sdf`.
+    pub parts: u32,
+    /// A deforming body's first part in `SubstepParams::parts`.
+    pub first_part: u32,
     /// Padding.
     pub _pad2: u32,
 }
@@ -111,6 +116,9 @@ pub struct SubstepParams {
     pub _pad1: u32,
     /// Each body's pose at the end of the substep, where collision is resolved.
     pub bodies: [BodyPose; MAX_BODIES],
+    /// The deforming bodies' collision parts' poses (rest pose to world) at the end of the
+    /// substep, body after body.
+    pub parts: [BodyPose; MAX_PARTS],
 }
 
 /// One spring seen from one of its ends (WGSL `SpringRef`).

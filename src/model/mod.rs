@@ -6,6 +6,7 @@ pub mod budget;
 mod build;
 mod collider;
 mod coloring;
+mod deforming;
 pub mod layout;
 mod levels;
 pub mod multigrid;
@@ -13,6 +14,7 @@ pub mod multigrid;
 pub use build::BuiltCloth;
 pub use collider::build_body;
 pub use coloring::Coloring;
+pub use deforming::{build_deforming, MANNEQUIN_GLB_PATH};
 
 use crate::mesh::TriMesh;
 use crate::scene::Fabric;

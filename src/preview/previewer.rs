@@ -11,11 +11,12 @@ use super::obj_frame::{frames, read_obj, FrameMesh};
 use super::occlusion::ambient_occlusion;
 use super::render::{render_textured, DrawMesh, FabricTexture};
 use super::seams::{seam_ribbons, seam_segments};
+use crate::body::deform::Deformation;
 use crate::body::exact::ExactBody;
 use crate::body::Body;
 use crate::error::{Error, InputError};
 use crate::gpu::{AdapterChoice, GpuContext};
-use crate::model::build_body;
+use crate::model::build_deforming;
 use crate::scene::{BodySettings, Scene};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -65,6 +66,8 @@ pub struct Previewer<'a> {
     scene: Option<&'a Scene>,
     fps: f32,
     bodies: Vec<(Body, &'a BodySettings)>,
+    /// Each body's deformation, if it deforms (parallel to `bodies`).
+    deforms: Vec<Option<Deformation>>,
     exact: Option<Vec<ExactBody>>,
     rest: Option<Vec<Vec3>>,
     seams: Option<Vec<[u32; 2]>>,
@@ -88,13 +91,12 @@ impl<'a> Previewer<'a> {
         fps: f32,
         adapter: &AdapterChoice,
     ) -> Result<Self, Error> {
-        let mut bodies = Vec::new();
+        let (mut bodies, mut deforms) = (Vec::new(), Vec::new());
         if let Some(s) = scene {
             for (i, settings) in s.bodies.iter().enumerate() {
-                bodies.push((
-                    build_body(settings, &s.checker(), &s.body_table(i))?,
-                    settings,
-                ));
+                let (body, deform) = build_deforming(settings, &s.checker(), &s.body_table(i))?;
+                bodies.push((body, settings));
+                deforms.push(deform);
             }
         }
         Ok(Previewer {
@@ -103,6 +105,7 @@ impl<'a> Previewer<'a> {
             scene,
             fps,
             bodies,
+            deforms,
             exact: None,
             rest: None,
             seams: None,
@@ -241,9 +244,27 @@ impl<'a> Previewer<'a> {
                         })?;
                     self.exact = Some(exact);
                 }
-                let exact = self.exact.as_ref().expect("built above");
                 let t = f.number as f32 / self.fps;
-                let poses: Vec<_> = (self.bodies.iter()).map(|(_, s)| s.motion.at(t)).collect();
+                // A deforming body's exact mesh is rebuilt as it is deformed at the frame.
+                for (i, d) in self.deforms.iter().enumerate() {
+                    if let Some(d) = d {
+                        let mesh = crate::mesh::TriMesh {
+                            positions: d.positions_at(t),
+                            triangles: self.bodies[i].0.mesh.triangles.clone(),
+                        };
+                        let e = ExactBody::new(&mesh).map_err(|e| {
+                            Error::Gpu(format!("cannot measure distances to the body: {e}"))
+                        })?;
+                        self.exact.as_mut().expect("built above")[i] = e;
+                    }
+                }
+                let exact = self.exact.as_ref().expect("built above");
+                let poses: Vec<_> = (self.bodies.iter().zip(&self.deforms))
+                    .map(|((_, s), d)| match d {
+                        Some(_) => crate::body::motion::BodyState::REST,
+                        None => s.motion.at(t),
+                    })
+                    .collect();
                 // The thinnest body sets the scale; a particle's distance is to the nearest body.
                 let thickness = (self.bodies.iter())
                     .map(|(_, s)| s.thickness)
@@ -314,6 +335,21 @@ impl<'a> Previewer<'a> {
         Ok(self.seams.as_deref().unwrap_or_default())
     }
 
+    /// Body `i`'s vertices in the world at `frame`: posed rigidly, or deformed.
+    fn body_positions(&self, i: usize, frame: u32) -> Vec<Vec3> {
+        let t = frame as f32 / self.fps;
+        match &self.deforms[i] {
+            Some(d) => d.positions_at(t),
+            None => {
+                let (body, settings) = &self.bodies[i];
+                let pose = settings.motion.at(t);
+                (body.mesh.positions.iter())
+                    .map(|p| pose.rotation * *p + pose.translation)
+                    .collect()
+            }
+        }
+    }
+
     /// The box a preset camera frames: the cloth, and the bodies where they lie near the
     /// cloth's box (a T-shirt's head, a skirt's hips, not the whole mannequin).
     pub fn framing_box(&self, frame: u32, cloth: &[Vec3]) -> (Vec3, Vec3) {
@@ -321,11 +357,8 @@ impl<'a> Previewer<'a> {
         // Up by 40% of the cloth's height (a T-shirt's head), elsewhere by 10% of its size.
         let side = Vec3::splat(0.1 * (hi - lo).max_element());
         let (near_lo, near_hi) = (lo - side, hi + side + Vec3::Y * 0.4 * (hi.y - lo.y));
-        let near: Vec<Vec3> = (self.bodies.iter())
-            .flat_map(|(body, settings)| {
-                let pose = settings.motion.at(frame as f32 / self.fps);
-                (body.mesh.positions.iter()).map(move |p| pose.rotation * *p + pose.translation)
-            })
+        let near: Vec<Vec3> = (0..self.bodies.len())
+            .flat_map(|i| self.body_positions(i, frame))
             .filter(|p| p.cmpge(near_lo).all() && p.cmple(near_hi).all())
             .collect();
         if near.is_empty() {
@@ -355,12 +388,9 @@ impl<'a> Previewer<'a> {
             let width_px = (h as f32 / 400.0).max(2.0);
             meshes.push(seam_ribbons(positions, &segments, &camera, h, width_px));
         }
-        for (body, settings) in &self.bodies {
-            let pose = settings.motion.at(frame as f32 / self.fps);
+        for (i, (body, _)) in self.bodies.iter().enumerate() {
             meshes.push(DrawMesh {
-                positions: (body.mesh.positions.iter())
-                    .map(|p| pose.rotation * *p + pose.translation)
-                    .collect(),
+                positions: self.body_positions(i, frame),
                 colors: vec![BODY; body.mesh.positions.len()],
                 triangles: body.mesh.triangles.clone(),
                 ..Default::default()

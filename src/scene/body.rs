@@ -52,6 +52,16 @@ pub(super) struct RawBody {
     motion_start_s: f64,
     #[serde(default)]
     keyframes: Vec<RawKeyframe>,
+    animation: Option<String>,
+    cache: Option<String>,
+    #[serde(default = "default_cache_fps")]
+    cache_fps: f64,
+    #[serde(default = "default_transition")]
+    transition_s: f64,
+    #[serde(default = "one")]
+    plays: i64,
+    #[serde(default = "default_parts")]
+    parts: i64,
 }
 
 #[derive(Deserialize)]
@@ -93,6 +103,22 @@ fn default_turn_angle() -> f64 {
 fn default_turn_period() -> f64 {
     1.0
 }
+fn default_cache_fps() -> f64 {
+    24.0
+}
+/// A second: long enough that the arms lowering from the A-pose (the usual first frame's
+/// change) move at about 0.6 m/s at the hands, slow enough to keep a sewn garment in place.
+fn default_transition() -> f64 {
+    1.0
+}
+fn one() -> i64 {
+    1
+}
+/// Parts fitted to a vertex cache: about a human's major segments (the shipped mannequin's rig
+/// has 19 joints).
+fn default_parts() -> i64 {
+    16
+}
 
 /// Where the body's triangles come from.
 #[derive(Clone, Debug, PartialEq)]
@@ -124,6 +150,15 @@ pub enum BodySource {
     Mannequin {
         /// Where it stands, in m.
         feet: Vec3,
+    },
+    /// A skinned glTF body (`None`: the shipped rigged mannequin, feet at `offset`).
+    Skinned {
+        /// Resolved path of the `.glb` or `.gltf` file.
+        path: Option<PathBuf>,
+        /// Metres per file unit.
+        scale: f32,
+        /// Translation in m.
+        offset: Vec3,
     },
     /// A capsule along y.
     Capsule {
@@ -166,6 +201,41 @@ pub struct BodySettings {
     pub edge_contacts: bool,
     /// Rigid motion.
     pub motion: Motion,
+    /// How a deforming body moves (`None`: rigid).
+    pub deform: Option<DeformSettings>,
+}
+
+/// What moves a deforming body, and when.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DeformSettings {
+    /// The motion's source.
+    pub motion: DeformMotion,
+    /// The rest pose holds until this time, in s.
+    pub start: f32,
+    /// Seconds over which the body blends from the rest pose into the motion's first frame.
+    pub transition: f32,
+    /// How many times the motion plays.
+    pub plays: u32,
+}
+
+/// Where a deforming body's motion comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum DeformMotion {
+    /// A clip of the body's glTF skin (or a built-in motion of the mannequin), by name; `None`
+    /// when the scene named none (the file's clips are listed in the error).
+    Skin {
+        /// The clip's name.
+        animation: Option<String>,
+    },
+    /// A vertex cache over the OBJ body's vertices.
+    Cache {
+        /// A `.pc2` file, or an OBJ sequence named with `#` for the frame number.
+        path: PathBuf,
+        /// The cache's frames per second.
+        fps: f32,
+        /// How many rigid parts collision fits to it.
+        parts: u32,
+    },
 }
 
 /// Most collision bodies a scene may have (`MAX_BODIES` in common.wgsl): each body's pose
@@ -240,7 +310,16 @@ pub(super) fn parse_all(
 
 /// Validates one body table, named `t` in messages.
 fn parse(c: &Checker, base: &Path, b: &RawBody, t: &str) -> Result<BodySettings, InputError> {
+    let gltf = |p: &str| {
+        let lower = p.to_lowercase();
+        lower.ends_with(".glb") || lower.ends_with(".gltf")
+    };
     let source = match (&b.path, b.shape.as_deref()) {
+        (Some(p), None) if gltf(p) => BodySource::Skinned {
+            path: Some(base.join(p)),
+            scale: c.units(t, "units", &b.units)?,
+            offset: c.vec3(t, "offset_m", b.offset_m)?,
+        },
         (Some(p), None) => BodySource::Mesh {
             path: base.join(p),
             scale: c.units(t, "units", &b.units)?,
@@ -281,6 +360,11 @@ fn parse(c: &Checker, base: &Path, b: &RawBody, t: &str) -> Result<BodySettings,
                         ),
                     }
                 }
+                "mannequin" if b.animation.is_some() => BodySource::Skinned {
+                    path: None,
+                    scale: 1.0,
+                    offset: center,
+                },
                 "mannequin" => BodySource::Mannequin { feet: center },
                 "capsule" => BodySource::Capsule {
                     center,
@@ -388,6 +472,19 @@ fn parse(c: &Checker, base: &Path, b: &RawBody, t: &str) -> Result<BodySettings,
             ))
         }
     };
+    let deform = parse_deform(c, base, b, t, &source, &motion)?;
+    if deform.is_some() && (strategy != Strategy::Sdf || b.edge_contacts) {
+        return Err(c.err(
+            t,
+            if b.edge_contacts {
+                "edge_contacts"
+            } else {
+                "collision_strategy"
+            },
+            "a deforming body collides through its rest pose's SDF and its parts' poses only",
+            "remove collision_strategy and edge_contacts from this body",
+        ));
+    }
     Ok(BodySettings {
         source,
         sdf_resolution: resolution,
@@ -413,5 +510,101 @@ fn parse(c: &Checker, base: &Path, b: &RawBody, t: &str) -> Result<BodySettings,
         strategy,
         edge_contacts: b.edge_contacts,
         motion,
+        deform,
     })
+}
+
+/// The deforming motion of body table `t`, if it has one: a glTF clip (`animation`), a built-in
+/// motion of the mannequin, or a vertex cache (`cache`).
+fn parse_deform(
+    c: &Checker,
+    base: &Path,
+    b: &RawBody,
+    t: &str,
+    source: &BodySource,
+    rigid: &Motion,
+) -> Result<Option<DeformSettings>, InputError> {
+    let motion =
+        match (source, &b.animation, &b.cache) {
+            (_, Some(_), Some(_)) => return Err(c.err(
+                t,
+                "cache",
+                "give either animation (a skinned glTF body) or cache (a vertex cache), not both",
+                "remove one",
+            )),
+            (BodySource::Skinned { .. }, animation, None) => DeformMotion::Skin {
+                animation: animation.clone(),
+            },
+            (BodySource::Mesh { .. }, None, Some(cache)) => DeformMotion::Cache {
+                path: base.join(cache),
+                fps: c.within(t, "cache_fps", b.cache_fps, (1e-3, 1e4), "frames/s")?,
+                parts: {
+                    let parts = b.parts.clamp(0, u32::MAX as i64) as u32;
+                    if parts == 0 || parts as usize > crate::body::deform::MAX_PARTS {
+                        return Err(c.err(
+                            t,
+                            "parts",
+                            format!("{} parts", b.parts),
+                            format!(
+                                "use 1 to {} (collision fits that many rigid parts to the cache)",
+                                crate::body::deform::MAX_PARTS
+                            ),
+                        ));
+                    }
+                    parts
+                },
+            },
+            (BodySource::Mesh { .. }, Some(_), None) => {
+                return Err(c.err(
+                    t,
+                    "animation",
+                    "an OBJ body has no skeleton to animate",
+                    "give path = a skinned .glb or .gltf avatar, or give the OBJ's motion as \
+                 cache = \"walk.pc2\" (or an OBJ sequence, walk_####.obj)",
+                ))
+            }
+            (_, None, Some(_)) => {
+                return Err(c.err(
+                    t,
+                    "cache",
+                    "a vertex cache needs the body's own mesh, whose vertices it moves",
+                    "give path = the OBJ the cache was exported from",
+                ))
+            }
+            (_, Some(_), None) => {
+                return Err(c.err(
+                    t,
+                    "animation",
+                    "only a skinned glTF body or the mannequin can play an animation",
+                    format!(
+                        "give path = a .glb or .gltf avatar, or shape = \"mannequin\" with one of \
+                     {:?}",
+                        crate::body::motions::NAMES
+                    ),
+                ))
+            }
+            (_, None, None) => return Ok(None),
+        };
+    if !rigid.keys.is_empty() {
+        return Err(c.err(
+            t,
+            "motion",
+            "a deforming body moves by its animation or cache only",
+            "remove motion and [[body.keyframes]], or the animation",
+        ));
+    }
+    if !(1..=10_000).contains(&b.plays) {
+        return Err(c.err(
+            t,
+            "plays",
+            format!("{} plays", b.plays),
+            "use a whole number from 1 (the motion plays once, then holds its last frame)",
+        ));
+    }
+    Ok(Some(DeformSettings {
+        motion,
+        start: c.non_negative(t, "motion_start_s", b.motion_start_s, "s")?,
+        transition: c.within(t, "transition_s", b.transition_s, (0.0, 600.0), "s")?,
+        plays: b.plays as u32,
+    }))
 }

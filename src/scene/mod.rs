@@ -14,7 +14,7 @@ mod self_collision;
 mod solver;
 mod world;
 
-pub use body::{BodySettings, BodySource, MAX_BODIES};
+pub use body::{BodySettings, BodySource, DeformMotion, DeformSettings, MAX_BODIES};
 pub use cloth::ClothSource;
 pub use fabric::{Fabric, HINGE_PER_RIGIDITY};
 pub use pins::{Corner, GridEdge, PinSelection};

@@ -3,7 +3,8 @@
 
 use super::SEWING_SLIP_SPEED;
 use crate::body::motion::BodyState;
-use crate::model::layout::{BodyParams, BodyPose, MAX_BODIES};
+use crate::body::Collider;
+use crate::model::layout::{BodyParams, BodyPose, MAX_BODIES, MAX_PARTS};
 use crate::model::ClothModel;
 use crate::scene::{BodySettings, Scene};
 
@@ -21,7 +22,7 @@ pub(super) fn body_speed_substeps(
 ) -> (u32, f32, bool) {
     let (mut substeps, mut fastest, mut raised) = (substeps, 0.0f32, false);
     for (i, (c, settings)) in model.colliders.iter().zip(&scene.bodies).enumerate() {
-        let speed = c.motion.max_surface_speed(&c.body.mesh.positions);
+        let speed = surface_speed(c);
         fastest = fastest.max(speed);
         let thickness = settings.thickness;
         let needed = (speed * frame_dt / thickness).ceil() as u32;
@@ -43,8 +44,22 @@ pub(super) fn body_speed_substeps(
     (substeps, fastest, raised)
 }
 
+/// The fastest any point of the body's surface moves, in m/s: for a deforming body, the faster
+/// of its vertices (sampled from the skin or the cache) and of its collision parts' surfaces
+/// (what collision sees).
+pub(super) fn surface_speed(c: &Collider) -> f32 {
+    match &c.deformed {
+        Some(d) => {
+            let d = &d.deformation;
+            d.max_vertex_speed().max(d.max_part_speed())
+        }
+        None => c.motion.max_surface_speed(&c.body.mesh.positions),
+    }
+}
+
 /// Each body's SDF grid (its nodes one after another in the SDF texture, in scene order) and
-/// contact response; friction's slip speed is `SEWING_SLIP_SPEED` while `sewing`.
+/// contact response; friction's slip speed is `SEWING_SLIP_SPEED` while `sewing`. A deforming
+/// body's parts follow the earlier deforming bodies' in `SubstepParams::parts`.
 pub(super) fn body_params(
     model: &ClothModel,
     bodies: &[BodySettings],
@@ -52,7 +67,9 @@ pub(super) fn body_params(
 ) -> [BodyParams; MAX_BODIES] {
     let mut out = [BodyParams::default(); MAX_BODIES];
     let mut first_node = 0u32;
+    let mut first_part = 0u32;
     for ((p, c), b) in out.iter_mut().zip(&model.colliders).zip(bodies) {
+        let parts = c.deformed.as_ref().map_or(0, |d| d.parts as u32);
         let g = &c.sdf;
         *p = BodyParams {
             sdf_origin: g.origin.extend(g.cell).to_array(),
@@ -66,9 +83,24 @@ pub(super) fn body_params(
             } else {
                 b.friction_slip_speed
             },
+            parts,
+            first_part,
             ..Default::default()
         };
         first_node += g.values.len() as u32;
+        first_part += parts;
+    }
+    out
+}
+
+/// The deforming bodies' collision parts' poses at time `t`, body after body.
+pub fn part_poses(model: &ClothModel, t: f32) -> [BodyPose; MAX_PARTS] {
+    let mut out = [BodyPose::default(); MAX_PARTS];
+    let states = (model.colliders.iter())
+        .filter_map(|c| c.deformed.as_ref())
+        .flat_map(|d| d.deformation.part_states(t));
+    for (pose, state) in out.iter_mut().zip(states) {
+        *pose = body_pose(&state);
     }
     out
 }

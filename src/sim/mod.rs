@@ -17,7 +17,7 @@ use crate::pattern::garment::Garment;
 use crate::plan::PassPlan;
 use crate::scene::{ClothSource, Scene, Wind};
 use crate::solver::{ParticleState, Solver};
-pub use bodies::body_pose;
+pub use bodies::{body_pose, part_poses};
 pub use coarse::{map_state, CoarseStart};
 use serde::{Deserialize, Serialize};
 use settle::frame_speed;
@@ -255,6 +255,13 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
             ));
         }
     }
+    if scene.output.gltf && model.colliders.iter().any(|c| c.deformed.is_some()) {
+        warnings.push(
+            "the glTF export shows a deforming body in its rest pose (its motion is in the OBJ \
+             frames: output.obj = true)"
+                .into(),
+        );
+    }
     let (substeps, body_surface_speed, body_limited) = bodies::body_speed_substeps(
         &model,
         scene,
@@ -396,6 +403,7 @@ pub fn substep_params(prep: &Prepared, frame: u32) -> Vec<SubstepParams> {
                 _pad0: 0,
                 _pad1: 0,
                 bodies,
+                parts: bodies::part_poses(&prep.model, t + prep.params.dt),
             }
         })
         .collect()
@@ -461,6 +469,10 @@ pub struct RunStats {
     /// The coarse start this run continued from, if any.
     #[serde(default)]
     pub coarse_start: Option<CoarseStart>,
+    /// With a deforming body: at each output frame (its number), the deepest particle inside
+    /// the exact deformed mesh, in m.
+    #[serde(default)]
+    pub deformed_penetration_m: Vec<(u32, f32)>,
 }
 
 /// A particle rests on the body when it is within the collision thickness plus this of the
@@ -666,9 +678,19 @@ pub fn simulate_from(
         stats.kinetic_energy_j = health.kinetic_energy;
         stats.seam_gaps = seam_gaps(&state);
         let mut touching = vec![false; state.positions.len()];
+        let mut deformed_depth: Option<f32> = None;
         for (b, c) in prep.model.colliders.iter().enumerate() {
-            let body = prep.body_state(b, frame as f32 * prep.frame_dt);
-            let distances = metrics::body_distances(c, &body, &state.positions);
+            let t = frame as f32 * prep.frame_dt;
+            let distances = if c.deformed.is_some() {
+                let d = metrics::deformed_distances(c, t, &state.positions).map_err(|e| {
+                    Error::Unstable(format!("the deformed body mesh at {t} s: {e}"))
+                })?;
+                let depth = metrics::max_penetration(&d);
+                deformed_depth = Some(deformed_depth.map_or(depth, |m| m.max(depth)));
+                d
+            } else {
+                metrics::body_distances(c, &prep.body_state(b, t), &state.positions)
+            };
             stats.max_penetration_m = stats
                 .max_penetration_m
                 .max(metrics::max_penetration(&distances));
@@ -676,6 +698,9 @@ pub fn simulate_from(
             metrics::mark_contacts(&distances, reach, &mut touching);
         }
         stats.body_contacts = touching.iter().filter(|&&t| t).count();
+        if let Some(depth) = deformed_depth {
+            stats.deformed_penetration_m.push((frame, depth));
+        }
         let all_closed = stats.seam_gaps.iter().all(|&g| g < prep.seam_closed_gap);
         if !stats.seam_gaps.is_empty() && all_closed && stats.seams_closed_frame.is_none() {
             stats.seams_closed_frame = Some(frame);

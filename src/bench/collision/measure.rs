@@ -94,6 +94,7 @@ pub fn build_all(
             bvh,
             edges,
             bake: base.bake.clone(),
+            deformed: base.deformed.clone(),
         };
         built.push(Built {
             contender,

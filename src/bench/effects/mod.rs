@@ -241,6 +241,7 @@ fn sphere_under(positions: &[Vec3]) -> BodySettings {
         strategy: Strategy::Sdf,
         edge_contacts: false,
         motion: Motion { keys: Vec::new() },
+        deform: None,
     }
 }
 
