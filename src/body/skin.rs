@@ -407,6 +407,9 @@ mod tests {
         // Key 0's out-tangent is X, the rest are zero: at s = ½ the Hermite basis gives ½ of
         // each value and ⅛ of the out-tangent (times the 1 s span). f32: ulps.
         let mid = sample(&c, v, 0.5, lerp3);
-        assert!((mid - (0.5 * Vec3::Y + 0.125 * Vec3::X)).length() < 1e-6, "{mid}");
+        assert!(
+            (mid - (0.5 * Vec3::Y + 0.125 * Vec3::X)).length() < 1e-6,
+            "{mid}"
+        );
     }
 }

@@ -11,6 +11,8 @@ use crate::model::layout::{
 mod bodies;
 mod coarse;
 mod settle;
+mod stats;
+
 use crate::model::BuiltCloth;
 use crate::model::ClothModel;
 use crate::pattern::garment::Garment;
@@ -19,9 +21,9 @@ use crate::scene::{ClothSource, Scene, Wind};
 use crate::solver::{ParticleState, Solver};
 pub use bodies::{body_pose, part_poses};
 pub use coarse::{map_state, CoarseStart};
-use serde::{Deserialize, Serialize};
 use settle::frame_speed;
 pub use settle::Settled;
+pub use stats::RunStats;
 use std::time::Instant;
 
 /// Fraction of the estimated stable step that `substeps = "auto"` uses.
@@ -407,72 +409,6 @@ pub fn substep_params(prep: &Prepared, frame: u32) -> Vec<SubstepParams> {
             }
         })
         .collect()
-}
-
-/// What a run measured, filled in frame by frame (so it is complete up to a failure). A
-/// checkpoint stores it, so a resumed run reports what the uninterrupted one would.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct RunStats {
-    /// Frames simulated.
-    pub frames_run: u32,
-    /// Seconds spent in `advance` and readback (not in writing files).
-    pub wall_seconds: f64,
-    /// Largest spring strain seen at any output frame.
-    pub max_edge_strain: f32,
-    /// Kinetic energy at the last good frame, in J.
-    pub kinetic_energy_j: f64,
-    /// Whether every frame was finite.
-    pub finite: bool,
-    /// Set when the settle rule stopped the run.
-    pub settled: Option<Settled>,
-    /// Largest pair gap per seam at the last good frame, in m (empty without seams).
-    pub seam_gaps: Vec<f32>,
-    /// The first output frame at which every seam was closed.
-    pub seams_closed_frame: Option<u32>,
-    /// The frame after which attached particles were released.
-    pub released_after_frame: Option<u32>,
-    /// Deepest particle inside the body at any output frame, against the exact mesh, in m.
-    pub max_penetration_m: f32,
-    /// Particles resting on the body at the last good frame (see `CONTACT_SLACK`).
-    pub body_contacts: usize,
-    /// Largest relative residual of the implicit solve at any output frame.
-    pub max_residual: Option<f32>,
-    /// Iterations the implicit solve ran, over every substep.
-    #[serde(default)]
-    pub iterations_run: u64,
-    /// Newton steps the implicit solve ran, over every substep.
-    #[serde(default)]
-    pub newton_steps_run: u64,
-    /// With the strain-limiting stage on: the edges at its cap (stretched to within 0.1% of it
-    /// or past it) at the last frame, which the cap, not the solve, holds.
-    #[serde(default)]
-    pub strain_limit_clamped_edges: Option<usize>,
-    /// The implicit solve's force residual |f|/(m·g) at the end of the last frame's last
-    /// substep: largest and RMS over the free particles.
-    #[serde(default)]
-    pub force_residual: Option<(f32, f32)>,
-    /// Largest spring strain at the last good frame.
-    pub last_edge_strain: f32,
-    /// The 99th percentile of the springs' strain at the last good frame.
-    #[serde(default)]
-    pub last_edge_strain_p99: f32,
-    /// Largest particle speed at any output frame, in m/s.
-    pub max_speed: f32,
-    /// The last frame's mechanical energy (kinetic + gravitational + elastic) and its kinetic
-    /// plus elastic part, in J, for the energy-growth check.
-    #[serde(default)]
-    pub energy: Option<(f64, f64)>,
-    /// The settle rule's speed at the last frame (see `frame_speed`), in m/s; `None` before
-    /// the first simulated frame.
-    #[serde(default)]
-    pub frame_speed_m_s: Option<f64>,
-    /// The coarse start this run continued from, if any.
-    #[serde(default)]
-    pub coarse_start: Option<CoarseStart>,
-    /// With a deforming body: at each output frame (its number), the deepest particle inside
-    /// the exact deformed mesh, in m.
-    #[serde(default)]
-    pub deformed_penetration_m: Vec<(u32, f32)>,
 }
 
 /// A particle rests on the body when it is within the collision thickness plus this of the
