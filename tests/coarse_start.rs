@@ -130,18 +130,13 @@ fn run_coarse_started_shirt(backend: &[&str], tag: &str) -> serde_json::Value {
     // tolerance: the means over the full mesh's frames are exactly 1 and 4.
     assert_eq!(f(&summary["newton_steps_mean"]), 1.0, "{summary:#}");
     assert_eq!(f(&summary["iterations_mean"]), 4.0, "{summary:#}");
-    // The bars of the shirt without a coarse start (tests/cli.rs): seams closed, nothing
-    // deeper in the body than the 3 mm thickness, 99% of the edges under 2% strain at rest.
+    // Seams closed and nothing deeper in the body than the 3 mm thickness, as without a coarse
+    // start (tests/cli.rs). The strain is not that shirt's: static friction holds part of what
+    // the 4 cm mesh left (largest 4.3-5.0% and 1.9-2.0% at the 99th percentile here, against
+    // 2.1% and 0.8% without a coarse start; 3.4% largest with five times the friction's creep
+    // speed: docs/src/implicit.md). The carry and the full mesh's own solve must not add to it.
     assert_eq!(summary["seams_closed"], summary["seams"], "{summary:#}");
     assert!(f(&summary["max_penetration_m"]) <= 0.003, "{summary:#}");
-    assert!(
-        f(&summary["last_frame_edge_strain_p99"]) <= 0.02,
-        "{summary:#}"
-    );
-    // The most stretched edges keep part of what the 4 cm mesh left where static friction
-    // holds the cloth on the body (5.0% here, against 2.1% without a coarse start; 3.4% with
-    // five times the friction's creep speed: docs/src/implicit.md); the carry and the full
-    // mesh's own solve must not add to it.
     assert!(
         f(&summary["last_frame_max_edge_strain"]) <= f(&coarse["max_edge_strain"]),
         "{summary:#}"
