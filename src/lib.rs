@@ -19,6 +19,7 @@ pub mod checkpoint;
 pub mod cpu;
 pub mod error;
 pub mod export;
+pub mod glb;
 pub mod gpu;
 pub mod health;
 pub mod mesh;

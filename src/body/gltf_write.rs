@@ -4,15 +4,16 @@
 //! mannequin takes the same path as an avatar exported from Blender.
 
 use super::skin::{Interpolation, SkinnedMesh, Values};
+use crate::glb::{node, GlbDoc};
 use gltf_json as json;
-use json::validation::{Checked::Valid, USize64};
+use json::validation::Checked::Valid;
 use json::{accessor, animation, buffer, mesh, Index};
 use std::collections::BTreeMap;
 
 /// The `.glb` bytes of `body` (`None` past the format's 32-bit sizes).
 pub fn skinned_glb(body: &SkinnedMesh, name: &str) -> Option<Vec<u8>> {
     let mut b = Builder::default();
-    b.root.asset.generator = Some(format!("drapekit {}", env!("CARGO_PKG_VERSION")));
+    b.doc.root.asset.generator = Some(format!("drapekit {}", env!("CARGO_PKG_VERSION")));
     let s = &body.skeleton;
     // Joint nodes first (node j is joint j), then the mesh node.
     for (j, local) in s.rest.iter().enumerate() {
@@ -20,7 +21,7 @@ pub fn skinned_glb(body: &SkinnedMesh, name: &str) -> Option<Vec<u8>> {
             .filter(|(_, p)| **p == Some(j))
             .map(|(c, _)| Index::new(c as u32))
             .collect();
-        b.root.push(json::Node {
+        b.doc.root.push(json::Node {
             name: Some(s.names[j].clone()),
             translation: Some(local.translation.to_array()),
             rotation: Some(json::scene::UnitQuaternion(local.rotation.to_array())),
@@ -35,7 +36,7 @@ pub fn skinned_glb(body: &SkinnedMesh, name: &str) -> Option<Vec<u8>> {
         .flat_map(|m| m.to_cols_array())
         .collect();
     let ibm = b.floats(&ibm, s.len(), accessor::Type::Mat4, None);
-    let skin = b.root.push(json::Skin {
+    let skin = b.doc.root.push(json::Skin {
         inverse_bind_matrices: Some(ibm),
         joints: (0..s.len() as u32).map(Index::new).collect(),
         skeleton: None,
@@ -44,7 +45,7 @@ pub fn skinned_glb(body: &SkinnedMesh, name: &str) -> Option<Vec<u8>> {
         extras: Default::default(),
     });
     let mesh = b.mesh(body, name);
-    let mesh_node = b.root.push(json::Node {
+    let mesh_node = b.doc.root.push(json::Node {
         name: Some(name.into()),
         mesh: Some(mesh),
         skin: Some(skin),
@@ -87,7 +88,7 @@ pub fn skinned_glb(body: &SkinnedMesh, name: &str) -> Option<Vec<u8>> {
                 extras: Default::default(),
             });
         }
-        b.root.push(json::Animation {
+        b.doc.root.push(json::Animation {
             channels,
             samplers,
             name: Some(clip.name.clone()),
@@ -101,38 +102,20 @@ pub fn skinned_glb(body: &SkinnedMesh, name: &str) -> Option<Vec<u8>> {
             .filter(|(_, p)| p.is_none())
             .map(|(j, _)| Index::new(j as u32)),
     );
-    let scene = b.root.push(json::Scene {
+    let scene = b.doc.root.push(json::Scene {
         nodes,
         name: Some(name.into()),
         extensions: None,
         extras: Default::default(),
     });
-    b.root.scene = Some(scene);
+    b.doc.root.scene = Some(scene);
     b.finish()
 }
 
-fn node() -> json::Node {
-    json::Node {
-        camera: None,
-        children: None,
-        extensions: None,
-        extras: Default::default(),
-        matrix: None,
-        mesh: None,
-        name: None,
-        rotation: None,
-        scale: None,
-        translation: None,
-        skin: None,
-        weights: None,
-    }
-}
-
-/// The glTF document and its binary chunk, filled together.
+/// The document being written, with this writer's parts on top of the shared plumbing.
 #[derive(Default)]
 struct Builder {
-    root: json::Root,
-    bin: Vec<u8>,
+    doc: GlbDoc,
 }
 
 impl Builder {
@@ -182,8 +165,8 @@ impl Builder {
             json::material::PbrBaseColorFactor([color[0], color[1], color[2], 1.0]);
         material.pbr_metallic_roughness.metallic_factor = json::material::StrengthFactor(0.0);
         material.pbr_metallic_roughness.roughness_factor = json::material::StrengthFactor(0.9);
-        let material = self.root.push(material);
-        self.root.push(json::Mesh {
+        let material = self.doc.root.push(material);
+        self.doc.root.push(json::Mesh {
             name: Some(name.into()),
             primitives: vec![mesh::Primitive {
                 attributes,
@@ -200,7 +183,7 @@ impl Builder {
         })
     }
 
-    /// An accessor over `bytes` (little endian), in a 4-byte aligned buffer view.
+    /// An accessor over `bytes` (little endian), in a view of its own.
     fn accessor(
         &mut self,
         bytes: &[u8],
@@ -210,34 +193,7 @@ impl Builder {
         bounds: Option<(json::Value, json::Value)>,
         target: Option<buffer::Target>,
     ) -> Index<json::Accessor> {
-        self.bin.resize(self.bin.len().next_multiple_of(4), 0);
-        let offset = self.bin.len();
-        self.bin.extend_from_slice(bytes);
-        let view = self.root.push(buffer::View {
-            buffer: Index::new(0),
-            byte_length: USize64::from(bytes.len()),
-            byte_offset: Some(USize64::from(offset)),
-            byte_stride: None,
-            name: None,
-            target: target.map(Valid),
-            extensions: None,
-            extras: Default::default(),
-        });
-        let (min, max) = bounds.unzip();
-        self.root.push(json::Accessor {
-            buffer_view: Some(view),
-            byte_offset: None,
-            count: USize64::from(count),
-            component_type: Valid(accessor::GenericComponentType(component)),
-            type_: Valid(kind),
-            min,
-            max,
-            name: None,
-            normalized: false,
-            sparse: None,
-            extensions: None,
-            extras: Default::default(),
-        })
+        (self.doc).accessor(bytes, count, kind, component, bounds, target)
     }
 
     /// f32 data; `scalar_bounds` adds the min and max that animation times need.
@@ -292,29 +248,8 @@ impl Builder {
         )
     }
 
-    /// The GLB container: a 12-byte header, the JSON chunk (padded with spaces) and the binary
-    /// chunk (padded with zeros), each 4-byte aligned.
-    fn finish(mut self) -> Option<Vec<u8>> {
-        self.bin.resize(self.bin.len().next_multiple_of(4), 0);
-        self.root.push(json::Buffer {
-            byte_length: USize64::from(self.bin.len()),
-            name: None,
-            uri: None,
-            extensions: None,
-            extras: Default::default(),
-        });
-        let mut text = self.root.to_vec().ok()?;
-        text.resize(text.len().next_multiple_of(4), b' ');
-        let total = u32::try_from(12 + 8 + text.len() + 8 + self.bin.len()).ok()?;
-        let mut out = Vec::with_capacity(total as usize);
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&total.to_le_bytes());
-        for (kind, chunk) in [(b"JSON", &text), (b"BIN\0", &self.bin)] {
-            out.extend_from_slice(&(chunk.len() as u32).to_le_bytes());
-            out.extend_from_slice(kind);
-            out.extend_from_slice(chunk);
-        }
-        Some(out)
+    /// The GLB bytes (`None` past the format's 32-bit sizes).
+    fn finish(self) -> Option<Vec<u8>> {
+        self.doc.finish()
     }
 }

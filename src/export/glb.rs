@@ -4,11 +4,12 @@
 //! a further node over one mesh, posed or moved rigidly by its own channels.
 
 use super::obj::unit_normals;
+use crate::glb::{node, GlbDoc};
 use crate::preview::BODY;
 use animation::Property::{MorphTargetWeights as Weights, Rotation, Translation};
 use glam::{Quat, Vec2, Vec3, Vec4};
 use gltf_json as json;
-use json::validation::{Checked::Valid, USize64};
+use json::validation::Checked::Valid;
 use json::{accessor, animation, buffer, material, mesh, Index};
 use std::collections::BTreeMap;
 
@@ -75,7 +76,7 @@ pub fn glb_bytes(
         return None;
     }
     let mut b = Builder::default();
-    b.root.asset.generator = Some(format!("drapekit {}", env!("CARGO_PKG_VERSION")));
+    b.doc.root.asset.generator = Some(format!("drapekit {}", env!("CARGO_PKG_VERSION")));
     let mut nodes = Vec::new();
     let mut channels = Vec::new();
     let mut samplers = Vec::new();
@@ -85,7 +86,7 @@ pub fn glb_bytes(
             return None;
         }
         let garment = b.cloth_mesh(cloth)?;
-        nodes.push(b.root.push(json::Node {
+        nodes.push(b.doc.root.push(json::Node {
             mesh: Some(garment),
             name: Some("garment".into()),
             ..node()
@@ -95,7 +96,7 @@ pub fn glb_bytes(
     for body in bodies {
         let (rotation, translation) = *body.poses.first()?;
         let mesh = b.body_mesh(body);
-        let node = b.root.push(json::Node {
+        let node = b.doc.root.push(json::Node {
             mesh: Some(mesh),
             name: Some(body.name.clone()),
             rotation: Some(json::scene::UnitQuaternion(rotation.to_array())),
@@ -125,7 +126,7 @@ pub fn glb_bytes(
         }
     }
     if !channels.is_empty() {
-        b.root.push(json::Animation {
+        b.doc.root.push(json::Animation {
             channels,
             samplers,
             name: Some("drape".into()),
@@ -133,13 +134,13 @@ pub fn glb_bytes(
             extras: Default::default(),
         });
     }
-    let scene = b.root.push(json::Scene {
+    let scene = b.doc.root.push(json::Scene {
         nodes,
         name: Some("drapekit".into()),
         extensions: None,
         extras: Default::default(),
     });
-    b.root.scene = Some(scene);
+    b.doc.root.scene = Some(scene);
     b.finish()
 }
 
@@ -171,29 +172,11 @@ impl Builder {
     }
 }
 
-/// A node with nothing set.
-fn node() -> json::Node {
-    json::Node {
-        camera: None,
-        children: None,
-        extensions: None,
-        extras: Default::default(),
-        matrix: None,
-        mesh: None,
-        name: None,
-        rotation: None,
-        scale: None,
-        translation: None,
-        skin: None,
-        weights: None,
-    }
-}
-
-/// The glTF document and its binary chunk, filled together.
+/// The document being written, with the garment's and bodies' parts on top of the shared
+/// plumbing.
 #[derive(Default)]
 struct Builder {
-    root: json::Root,
-    bin: Vec<u8>,
+    doc: GlbDoc,
 }
 
 impl Builder {
@@ -263,7 +246,7 @@ impl Builder {
             ));
         }
         let count = targets.len();
-        Some(self.root.push(json::Mesh {
+        Some(self.doc.root.push(json::Mesh {
             name: Some("garment".into()),
             primitives,
             weights: (count > 0).then(|| vec![0.0; count]),
@@ -275,7 +258,7 @@ impl Builder {
     /// The fabric image as an embedded PNG, repeated over the texture coordinates.
     fn texture(&mut self, png: &[u8]) -> Index<json::Texture> {
         let view = self.view(png, None);
-        let image = self.root.push(json::Image {
+        let image = self.doc.root.push(json::Image {
             buffer_view: Some(view),
             mime_type: Some(json::image::MimeType("image/png".into())),
             name: Some("fabric".into()),
@@ -284,7 +267,7 @@ impl Builder {
             extras: Default::default(),
         });
         use json::texture::{MagFilter, MinFilter, WrappingMode};
-        let sampler = self.root.push(json::texture::Sampler {
+        let sampler = self.doc.root.push(json::texture::Sampler {
             mag_filter: Some(Valid(MagFilter::Linear)),
             min_filter: Some(Valid(MinFilter::LinearMipmapLinear)),
             name: None,
@@ -293,7 +276,7 @@ impl Builder {
             extensions: None,
             extras: Default::default(),
         });
-        self.root.push(json::Texture {
+        self.doc.root.push(json::Texture {
             name: Some("fabric".into()),
             sampler: Some(sampler),
             source: image,
@@ -313,7 +296,7 @@ impl Builder {
         attributes.insert(Valid(mesh::Semantic::Normals), normals);
         let material = self.material("body", BODY.extend(1.0), false, None);
         let indices = self.indices(body.triangles);
-        self.root.push(json::Mesh {
+        self.doc.root.push(json::Mesh {
             name: Some(body.name.clone()),
             primitives: vec![primitive(attributes, indices, material, Vec::new())],
             weights: None,
@@ -344,25 +327,13 @@ impl Builder {
         });
         m.pbr_metallic_roughness.metallic_factor = material::StrengthFactor(0.0);
         m.pbr_metallic_roughness.roughness_factor = material::StrengthFactor(0.9);
-        self.root.push(m)
+        self.doc.root.push(m)
     }
 
     /// Appends `bytes` (little endian, as glTF requires) as a buffer view, 4-byte aligned
     /// (every component here is 4 bytes).
     fn view(&mut self, bytes: &[u8], target: Option<buffer::Target>) -> Index<buffer::View> {
-        self.bin.resize(self.bin.len().next_multiple_of(4), 0);
-        let offset = self.bin.len();
-        self.bin.extend_from_slice(bytes);
-        self.root.push(buffer::View {
-            buffer: Index::new(0),
-            byte_length: USize64::from(bytes.len()),
-            byte_offset: Some(USize64::from(offset)),
-            byte_stride: None,
-            name: None,
-            target: target.map(Valid),
-            extensions: None,
-            extras: Default::default(),
-        })
+        self.doc.view(bytes, target)
     }
 
     /// An f32 accessor of `count` elements of `kind`.
@@ -375,22 +346,8 @@ impl Builder {
         target: Option<buffer::Target>,
     ) -> Index<json::Accessor> {
         let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
-        let view = self.view(&bytes, target);
-        let (min, max) = bounds.unzip();
-        self.root.push(json::Accessor {
-            buffer_view: Some(view),
-            byte_offset: None,
-            count: USize64::from(count),
-            component_type: Valid(accessor::GenericComponentType(accessor::ComponentType::F32)),
-            type_: Valid(kind),
-            min,
-            max,
-            name: None,
-            normalized: false,
-            sparse: None,
-            extensions: None,
-            extras: Default::default(),
-        })
+        let f32s = accessor::ComponentType::F32;
+        (self.doc).accessor(&bytes, count, kind, f32s, bounds, target)
     }
 
     /// Vec3 data; `bounds` adds the min/max that glTF requires of positions.
@@ -429,21 +386,9 @@ impl Builder {
             .flatten()
             .flat_map(|i| i.to_le_bytes())
             .collect();
-        let view = self.view(&bytes, Some(buffer::Target::ElementArrayBuffer));
-        self.root.push(json::Accessor {
-            buffer_view: Some(view),
-            byte_offset: None,
-            count: USize64::from(3 * triangles.len()),
-            component_type: Valid(accessor::GenericComponentType(accessor::ComponentType::U32)),
-            type_: Valid(accessor::Type::Scalar),
-            min: None,
-            max: None,
-            name: None,
-            normalized: false,
-            sparse: None,
-            extensions: None,
-            extras: Default::default(),
-        })
+        let (count, u32s) = (3 * triangles.len(), accessor::ComponentType::U32);
+        let target = Some(buffer::Target::ElementArrayBuffer);
+        (self.doc).accessor(&bytes, count, accessor::Type::Scalar, u32s, None, target)
     }
 
     /// A linear sampler from `input` times to `output` values, driving `path` of `node`.
@@ -475,30 +420,9 @@ impl Builder {
         }
     }
 
-    /// The GLB container: a 12-byte header, the JSON chunk (padded with spaces) and the binary
-    /// chunk (padded with zeros), each 4-byte aligned.
-    fn finish(mut self) -> Option<Vec<u8>> {
-        self.bin.resize(self.bin.len().next_multiple_of(4), 0);
-        self.root.push(json::Buffer {
-            byte_length: USize64::from(self.bin.len()),
-            name: None,
-            uri: None,
-            extensions: None,
-            extras: Default::default(),
-        });
-        let mut text = self.root.to_vec().ok()?;
-        text.resize(text.len().next_multiple_of(4), b' ');
-        let total = u32::try_from(12 + 8 + text.len() + 8 + self.bin.len()).ok()?;
-        let mut out = Vec::with_capacity(total as usize);
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&total.to_le_bytes());
-        for (kind, chunk) in [(b"JSON", &text), (b"BIN\0", &self.bin)] {
-            out.extend_from_slice(&(chunk.len() as u32).to_le_bytes());
-            out.extend_from_slice(kind);
-            out.extend_from_slice(chunk);
-        }
-        Some(out)
+    /// The GLB bytes (`None` past the format's 32-bit sizes).
+    fn finish(self) -> Option<Vec<u8>> {
+        self.doc.finish()
     }
 }
 
