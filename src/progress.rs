@@ -1,6 +1,7 @@
-//! Progress bars on stderr for the long steps of a run (the body's distance-field bake). Off
-//! unless the command line turns them on, so that a library caller or a batch worker draws
-//! nothing; indicatif also draws nothing when stderr is not a terminal.
+//! Progress bars on stderr for the long steps of a run (the body's distance-field bake, the
+//! frames). The bake's bar is off unless the command line turns it on, so that a library
+//! caller or a batch worker draws nothing; indicatif also draws nothing when stderr is not a
+//! terminal.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -22,5 +23,19 @@ pub fn bar(len: u64, message: String) -> indicatif::ProgressBar {
             .expect("a valid template"),
     );
     bar.set_message(message);
+    bar
+}
+
+/// A frame counter with simulated time, throughput and the time left, on stderr; hidden when
+/// `show` is off or stderr is not a terminal (indicatif draws nothing then).
+pub fn frames(show: bool, frames: u32) -> indicatif::ProgressBar {
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(frames as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:30} frame {pos}/{len}  {msg}  {eta} left")
+            .expect("a valid template"),
+    );
     bar
 }

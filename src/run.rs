@@ -372,7 +372,7 @@ fn run_scene_from(
         outputs.extend(exporter.rest_frame(&prep.model.positions)?);
     }
     let mut previews = RunPreviews::new(&scene, &opts.adapter, &out_dir);
-    let bar = progress_bar(opts.progress, prep.frames);
+    let bar = crate::progress::frames(opts.progress, prep.frames);
     let particle_substeps = prep.model.len() as f64 * prep.substeps as f64;
     let started = std::time::Instant::now();
     // Frames this call simulates start after a checkpoint's or a coarse start's frame.
@@ -689,18 +689,4 @@ fn coarse_start(
         ..RunStats::default()
     };
     Ok((ResumeFrom { frame, state }, continued))
-}
-
-/// A frame counter with simulated time, throughput and the time left, on stderr; hidden when
-/// `show` is off or stderr is not a terminal (indicatif draws nothing then).
-fn progress_bar(show: bool, frames: u32) -> indicatif::ProgressBar {
-    if !show {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(frames as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{bar:30} frame {pos}/{len}  {msg}  {eta} left")
-            .expect("a valid template"),
-    );
-    bar
 }
