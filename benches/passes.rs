@@ -346,6 +346,7 @@ fn model_build(c: &mut Criterion) {
         bending_stiffness: Some(1e-5),
         damping_ratio: 0.05,
         preset: None,
+        membrane: None,
     };
     for n in [256u32, 1024] {
         let origin = glam::Vec3::new(0.0, 1.0, 0.0);

@@ -97,6 +97,15 @@ struct Hinge {
     _pad1: u32,
 }
 
+// A membrane triangle (mirrors layout::Membrane): particles v.xyz; shape = (α1, α2, β1, β2) in
+// 1/m, the warp and weft images w_u = Σ αj·xj, w_v = Σ βj·xj with α0 = −α1 − α2,
+// β0 = −β1 − β2; stiffness = (warp·A, weft·A, shear·A in N·m, damping time constant τ in s).
+struct Membrane {
+    v: vec4<u32>,
+    shape: vec4<f32>,
+    stiffness: vec4<f32>,
+}
+
 // A seam pair: vertex v.x is pulled towards the partner point (1 − weight)·x[v.y] + weight·x[v.z]
 // on the other edge by a spring whose rest gap shrinks from open_gap to 0 at
 // SimParams.sewing_rate (0 from the start when open_gap is 0); the partner's ends take the
@@ -127,6 +136,10 @@ fn unpack_spring(t: vec4<u32>) -> SpringRef {
 
 fn unpack_hinge(a: vec4<u32>, b: vec4<u32>) -> Hinge {
     return Hinge(a, bitcast<f32>(b.x), bitcast<f32>(b.y), bitcast<f32>(b.z), b.w);
+}
+
+fn unpack_membrane(a: vec4<u32>, b: vec4<u32>, c: vec4<u32>) -> Membrane {
+    return Membrane(a, bitcast<vec4<f32>>(b), bitcast<vec4<f32>>(c));
 }
 
 fn unpack_seam(a: vec4<u32>, b: vec4<u32>) -> Seam {

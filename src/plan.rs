@@ -14,6 +14,8 @@ pub enum Pass {
     HingeForces,
     /// Stretch springs on mesh edges.
     SpringForces,
+    /// The orthotropic membrane (warp, weft and shear per triangle), in place of the springs.
+    MembraneForces,
     /// Dihedral bending, each hinge evaluated from each of its four vertices (the other way to
     /// evaluate hinges; see `HingeEvaluation`).
     BendingForces,
@@ -53,9 +55,10 @@ pub enum Pass {
 
 impl Pass {
     /// Every stage, in execution order.
-    pub const ALL: [Pass; 17] = [
+    pub const ALL: [Pass; 18] = [
         Pass::HingeForces,
         Pass::SpringForces,
+        Pass::MembraneForces,
         Pass::BendingForces,
         Pass::WindForces,
         Pass::SeamForces,
@@ -78,6 +81,7 @@ impl Pass {
         match self {
             Pass::HingeForces => "hinge_forces",
             Pass::SpringForces => "spring_forces",
+            Pass::MembraneForces => "membrane_forces",
             Pass::BendingForces => "bending_forces",
             Pass::WindForces => "wind_forces",
             Pass::SeamForces => "seam_forces",
@@ -105,7 +109,11 @@ impl Pass {
     pub fn is_force(self) -> bool {
         matches!(
             self,
-            Pass::SpringForces | Pass::BendingForces | Pass::WindForces | Pass::SeamForces
+            Pass::SpringForces
+                | Pass::MembraneForces
+                | Pass::BendingForces
+                | Pass::WindForces
+                | Pass::SeamForces
         )
     }
 
@@ -126,6 +134,7 @@ impl Pass {
         match self {
             Pass::HingeForces => include_str!("../kernels/hinge_forces.wgsl"),
             Pass::SpringForces => include_str!("../kernels/spring_forces.wgsl"),
+            Pass::MembraneForces => include_str!("../kernels/membrane_forces.wgsl"),
             Pass::BendingForces => include_str!("../kernels/bending_forces.wgsl"),
             Pass::WindForces => include_str!("../kernels/wind_forces.wgsl"),
             Pass::SeamForces => include_str!("../kernels/seam_forces.wgsl"),
@@ -174,8 +183,12 @@ impl PassPlan {
     /// `bending_forces`; each backend may evaluate it its own way (`for_backend`).
     pub fn new(model: &ClothModel, effects: Effects) -> Self {
         let wanted = |pass: &Pass| match pass {
-            // Implicit Euler evaluates springs, hinges and seams inside its solve.
-            Pass::SpringForces => !effects.implicit && !model.springs.is_empty(),
+            // Implicit Euler evaluates springs, membranes, hinges and seams inside its solve;
+            // a membrane's springs carry no force.
+            Pass::SpringForces => {
+                !effects.implicit && !model.springs.is_empty() && model.membranes.is_empty()
+            }
+            Pass::MembraneForces => !effects.implicit && !model.membranes.is_empty(),
             Pass::BendingForces => !effects.implicit && effects.bending && !model.hinges.is_empty(),
             Pass::HingeForces => false,
             Pass::WindForces => effects.wind && !model.triangles.is_empty(),

@@ -113,6 +113,7 @@ fn chain(n: usize, m: f32, k: f32, l0: f32, damping: f32) -> ClothModel {
             .collect(),
         hinges: vec![],
         seams: vec![],
+        membranes: vec![],
         colliders: Vec::new(),
         multigrid: None,
     }

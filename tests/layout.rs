@@ -3,7 +3,7 @@
 
 use drapekit::gpu::kernels::{validate_wgsl, COMMON_WGSL};
 use drapekit::model::layout::{
-    BodyParams, BodyPose, Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep,
+    BodyParams, BodyPose, Hinge, Membrane, Seam, SimParams, SpringRef, SubstepParams, Sweep,
 };
 use std::mem::{offset_of, size_of};
 
@@ -165,6 +165,19 @@ fn hinge_layout() {
 }
 
 #[test]
+fn membrane_layout() {
+    check(
+        "Membrane",
+        size_of::<Membrane>(),
+        &[
+            ("v", offset_of!(Membrane, v)),
+            ("shape", offset_of!(Membrane, shape)),
+            ("stiffness", offset_of!(Membrane, stiffness)),
+        ],
+    );
+}
+
+#[test]
 fn sweep_layout() {
     check(
         "Sweep",
@@ -219,4 +232,6 @@ fn structs_stored_in_texels_fill_whole_texels() {
     assert_eq!(size_of::<SpringRef>(), 16);
     assert_eq!(size_of::<Hinge>(), 32);
     assert_eq!(size_of::<Seam>(), 32);
+    // A membrane is three texels.
+    assert_eq!(size_of::<Membrane>(), 48);
 }

@@ -29,6 +29,7 @@ pub fn bench_model(n: u32) -> (ClothModel, SimParams, PassPlan) {
         bending_stiffness: Some(1e-5),
         damping_ratio: 0.05,
         preset: None,
+        membrane: None,
     };
     let model = ClothModel::from_mesh(&mesh, &fabric, &[(n - 1) * n, n * n - 1]);
     let plan = PassPlan::new(

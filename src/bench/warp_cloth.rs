@@ -100,6 +100,7 @@ pub fn model(dim: u32) -> ClothModel {
         hinges: Vec::new(),
         multigrid: None,
         seams: Vec::new(),
+        membranes: Vec::new(),
         colliders: Vec::new(),
     }
 }

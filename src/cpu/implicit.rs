@@ -14,7 +14,7 @@ use super::restrict::restrict;
 use super::smooth::{block_jacobi, level_residual, smooth};
 use super::vbd_solve::vbd_solve;
 use crate::model::layout::{
-    Hinge, Seam, SimParams, SpringRef, SubstepParams, Sweep, WORKGROUP_SIZE,
+    Hinge, Membrane, Seam, SimParams, SpringRef, SubstepParams, Sweep, WORKGROUP_SIZE,
 };
 use crate::model::multigrid::Multigrid;
 use crate::model::{ClothModel, Csr};
@@ -27,13 +27,24 @@ pub struct Elements {
     springs: Csr<SpringRef>,
     hinges: Option<(Vec<Hinge>, Csr<u32>)>,
     seams: Option<(Vec<Seam>, Csr<u32>)>,
+    membranes: Option<(Vec<Membrane>, Csr<u32>)>,
 }
 
 impl Elements {
-    /// The model's springs, hinges and seam pairs.
+    /// The model's springs, hinges, seam pairs and membrane (whose springs carry no force:
+    /// the solve leaves them out).
     pub fn new(model: &ClothModel) -> Elements {
+        let membrane = !model.membranes.is_empty();
         Elements {
-            springs: model.spring_csr(),
+            springs: if membrane {
+                Csr {
+                    offsets: vec![0; model.len() + 1],
+                    items: Vec::new(),
+                }
+            } else {
+                model.spring_csr()
+            },
+            membranes: membrane.then(|| (model.membranes.clone(), model.membrane_csr())),
             hinges: (!model.hinges.is_empty()).then(|| (model.hinges.clone(), model.hinge_csr())),
             seams: (!model.seams.is_empty()).then(|| (model.seams.clone(), model.seam_csr())),
         }
@@ -51,6 +62,10 @@ impl Elements {
                 .seams
                 .as_ref()
                 .map(|(s, c)| (&c.offsets[..], &c.items[..], &s[..])),
+            membranes: self
+                .membranes
+                .as_ref()
+                .map(|(m, c)| (&c.offsets[..], &c.items[..], &m[..])),
         }
     }
 }

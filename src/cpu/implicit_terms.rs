@@ -32,8 +32,9 @@
 
 use super::collide_body::{body_velocity_at, to_body_frame};
 use super::hinge_forces::HingeFrame;
+use super::membrane::MembraneStep;
 use super::seam_forces::rest_gap;
-use crate::model::layout::{Hinge, Seam, SimParams, SpringRef, SubstepParams};
+use crate::model::layout::{Hinge, Membrane, Seam, SimParams, SpringRef, SubstepParams};
 use crate::model::multigrid::ElementBlocks;
 use glam::{Mat3, Vec3, Vec3A, Vec4};
 
@@ -56,6 +57,9 @@ pub struct VbdElements<'a> {
     pub hinges: Option<(&'a [u32], &'a [u32], &'a [Hinge])>,
     /// Seam offsets, seam refs (index · 4 + role) and seam pairs, when the cloth is sewn.
     pub seams: Option<(&'a [u32], &'a [u32], &'a [Seam])>,
+    /// Membrane offsets, refs (triangle · 4 + role) and triangles, when the fabric is a
+    /// membrane.
+    pub membranes: Option<(&'a [u32], &'a [u32], &'a [Membrane])>,
 }
 
 /// What every implicit stage reads: the step, the state at its start, the elements and the
@@ -87,7 +91,7 @@ pub struct VertexSystem {
     pub hessian: Mat3,
 }
 
-pub(super) fn outer(a: Vec3, b: Vec3) -> Mat3 {
+pub(crate) fn outer(a: Vec3, b: Vec3) -> Mat3 {
     Mat3::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
@@ -179,6 +183,12 @@ impl Implicit<'_> {
                 sum += share * share * (s.stiffness + s.damping / h);
             }
         }
+        if let Some((offsets, refs, membranes)) = self.el.membranes {
+            for &r in &refs[offsets[i] as usize..offsets[i + 1] as usize] {
+                let m = &membranes[(r / 4) as usize];
+                sum += MembraneStep::constant_stiffness(m, (r % 4) as usize, h);
+            }
+        }
         CONTACT_RATIO * sum
     }
 
@@ -261,6 +271,24 @@ impl Implicit<'_> {
                         if free(hinge.v[other as usize] as usize) {
                             let block = c * outer(u, t.direction(other));
                             sink(b.hinges[k as usize][other as usize], block);
+                        }
+                    }
+                }
+            }
+        }
+
+        if let Some((offsets, refs, membranes)) = self.el.membranes {
+            for k in offsets[i]..offsets[i + 1] {
+                let r = refs[k as usize];
+                let m = &membranes[(r / 4) as usize];
+                let role = (r % 4) as usize;
+                let (fm, mb) = MembraneStep::at(m, self.prev, d).system(m, role, h);
+                f += fm;
+                hess += mb[role];
+                if let Some(b) = blocks {
+                    for other in (0..3).filter(|&o| o != role) {
+                        if free(m.v[other] as usize) {
+                            sink(b.membranes[k as usize][other], mb[other]);
                         }
                     }
                 }
@@ -379,6 +407,23 @@ impl Implicit<'_> {
                 let before = self.hinge_energy(hinge, d, c, 0.0);
                 for (o, &a) in out.iter_mut().zip(&alphas) {
                     *o += self.hinge_energy(hinge, d, c, a) - before;
+                }
+            }
+        }
+
+        if let Some((offsets, refs, membranes)) = self.el.membranes {
+            for &r in &refs[offsets[i] as usize..offsets[i + 1] as usize] {
+                if r % 4 != 0 {
+                    continue;
+                }
+                let m = &membranes[(r / 4) as usize];
+                let step = MembraneStep::at(m, self.prev, d);
+                let dw = [
+                    super::membrane::image(m, &step.a, c),
+                    super::membrane::image(m, &step.b, c),
+                ];
+                for (o, &a) in out.iter_mut().zip(&alphas) {
+                    *o += step.energy_change(m, [a * dw[0], a * dw[1]], h);
                 }
             }
         }

@@ -23,6 +23,7 @@ mod implicit;
 mod implicit_terms;
 mod integrate;
 mod line_energy;
+pub mod membrane;
 mod monitor;
 mod pcg;
 mod prolong;
@@ -87,6 +88,7 @@ pub struct CpuSolver {
     /// Force accumulator, cleared by `integrate`.
     pub force: Vec<Vec4>,
     springs: Option<Csr<SpringRef>>,
+    membranes: Option<(Vec<crate::model::layout::Membrane>, Csr<u32>)>,
     hinges: Option<Hinges>,
     /// The hinges and each particle's hinge refs, for `bending_forces` (per vertex).
     vertex_hinges: Option<(Vec<Hinge>, Csr<u32>)>,
@@ -171,6 +173,9 @@ impl CpuSolver {
             springs: plan
                 .contains(Pass::SpringForces)
                 .then(|| model.spring_csr()),
+            membranes: plan
+                .contains(Pass::MembraneForces)
+                .then(|| (model.membranes.clone(), model.membrane_csr())),
             hinges: plan.contains(Pass::HingeForces).then(|| Hinges {
                 hinges: model.hinges.clone(),
                 csr: model.hinge_csr(),
@@ -257,6 +262,21 @@ impl CpuSolver {
                     &mut self.force,
                     &csr.offsets,
                     &csr.items,
+                );
+            }
+            Pass::MembraneForces => {
+                let (membranes, csr) = self
+                    .membranes
+                    .as_ref()
+                    .expect("membrane_forces is not in the plan");
+                membrane::membrane_forces(
+                    p,
+                    &self.pos,
+                    &self.vel,
+                    &mut self.force,
+                    &csr.offsets,
+                    &csr.items,
+                    membranes,
                 );
             }
             Pass::HingeForces => {

@@ -17,6 +17,7 @@ pub(super) enum Elements {
     /// Hinge offsets (for `integrate`'s gather).
     HingeOffsets,
     Seams,
+    Membranes,
     Triangles,
     SelfNeighbours,
     Sdf,
@@ -29,6 +30,7 @@ pub(super) fn stage_elements(pass: Pass, energies: VbdEnergies) -> Vec<Elements>
         Pass::BendingForces => vec![Elements::Hinges],
         Pass::WindForces => vec![Elements::Triangles],
         Pass::SeamForces => vec![Elements::Seams],
+        Pass::MembraneForces => vec![Elements::Membranes],
         Pass::SelfCollide => vec![Elements::SelfNeighbours],
         Pass::CollideBody => vec![Elements::Sdf],
         Pass::VbdSolve => {
@@ -151,6 +153,26 @@ pub(super) fn element_arrays(
                     "seams",
                     Rgba32Uint,
                     bytes(bytemuck::cast_slice(&model.seams)),
+                ),
+            ]
+        }
+        Elements::Membranes => {
+            let csr = model.membrane_csr();
+            vec![
+                (
+                    "membrane_offsets",
+                    R32Uint,
+                    bytes(bytemuck::cast_slice(&csr.offsets)),
+                ),
+                (
+                    "membrane_refs",
+                    R32Uint,
+                    bytes(bytemuck::cast_slice(&csr.items)),
+                ),
+                (
+                    "membranes",
+                    Rgba32Uint,
+                    bytes(bytemuck::cast_slice(&model.membranes)),
                 ),
             ]
         }

@@ -140,6 +140,13 @@ impl GpuSolver {
                 "a deforming body collides on the CPU path only (--backend cpu)".into(),
             ));
         }
+        // The implicit kernels have no membrane terms yet.
+        if plan.contains(Pass::VbdSolve) && !model.membranes.is_empty() {
+            return Err(Error::Gpu(
+                "implicit Euler with a membrane fabric runs on the CPU path only (--backend cpu)"
+                    .into(),
+            ));
+        }
         let state_usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC;
         let mut labels = vec!["params", "positions", "velocities", "forces", "staging"];
         let params_buf = ctx
@@ -336,6 +343,15 @@ impl GpuSolver {
                         out(),
                         o(0),
                         o(1),
+                    ],
+                    Pass::MembraneForces => vec![
+                        Binding::Uniform(&params_buf),
+                        Binding::Read(&pos[p]),
+                        Binding::Read(&vel[p]),
+                        out(),
+                        o(0),
+                        o(1),
+                        o(2),
                     ],
                     Pass::BendingForces => vec![
                         Binding::Uniform(&params_buf),

@@ -488,7 +488,7 @@ pub fn check_mesh_scale(scene: &Scene, mesh: &crate::mesh::TriMesh) -> Result<()
     }
     let density = scene.fabric.density as f64;
     let mass = (area.iter().filter(|&&a| a > 0.0)).fold(f64::INFINITY, |m, &a| m.min(a * density));
-    let stiffness = stiffness * scene.fabric.stretch_stiffness as f64;
+    let stiffness = stiffness * scene.fabric.stiffest_stretch() as f64;
     let omega = (2.0 * 8.0 * stiffness / mass).sqrt();
     let (table, key) = match &scene.cloth {
         ClothSource::Grid { .. } => ("cloth.grid", "width_m"),

@@ -107,6 +107,54 @@ impl Scene {
         )?))
     }
 
+    /// Each triangle's warp direction: the pattern's panel axes (or the grid's width, or world
+    /// x for a mesh) turned by the scene's grain angles.
+    fn grain_directions(
+        &self,
+        mesh: &TriMesh,
+        garment: Option<&Garment>,
+    ) -> Result<Vec<Vec3>, InputError> {
+        let g = &self.grain;
+        let Some(garment) = garment else {
+            if let Some(name) = g.panels.keys().next() {
+                return Err(self.error(
+                    "fabric.panel_grain_deg",
+                    name,
+                    "the cloth has no panels (it is not a sewing pattern)",
+                    "use [fabric] grain_deg for a grid or a mesh",
+                ));
+            }
+            let normal = match &self.cloth {
+                ClothSource::Grid {
+                    plane: crate::mesh::GridPlane::Xz,
+                    ..
+                } => Vec3::Y,
+                _ => Vec3::Z,
+            };
+            let n = mesh.triangles.len();
+            return Ok(super::membrane::world_grain(n, g.default, normal));
+        };
+        let mut by_panel = vec![g.default; garment.panel_names.len()];
+        for (name, &angle) in &g.panels {
+            let Some(k) = garment.panel_names.iter().position(|p| p == name) else {
+                return Err(self.error(
+                    "fabric.panel_grain_deg",
+                    name,
+                    format!("the pattern has no panel {name:?}"),
+                    format!("use one of {:?}", garment.panel_names),
+                ));
+            };
+            by_panel[k] = angle;
+        }
+        let panel = &garment.triangle_panel;
+        Ok(super::membrane::chart_grain(
+            &mesh.positions,
+            &garment.uv,
+            &mesh.triangles,
+            |t| by_panel[panel[t] as usize],
+        ))
+    }
+
     /// The particles each pin entry selects; an entry that selects nothing is an error.
     pub fn pinned_particles(&self, mesh: &TriMesh) -> Result<Vec<u32>, InputError> {
         let c = self.checker();
@@ -184,6 +232,10 @@ impl Scene {
         };
         let pinned: Vec<u32> = scene_pins.iter().chain(&attached).copied().collect();
         let mut model = ClothModel::from_mesh(&mesh, &self.fabric, &pinned);
+        if self.fabric.membrane.is_some() {
+            let grain = self.grain_directions(&mesh, garment.as_ref())?;
+            model.set_grain(&grain, &self.fabric);
+        }
         for (i, b) in self.bodies.iter().enumerate() {
             let collider = build_collider(b, &self.checker(), &self.body_table(i))?;
             model.colliders.push(std::sync::Arc::new(collider));

@@ -144,6 +144,7 @@ mod tests {
             bending_stiffness: Some(1e-5),
             damping_ratio: 0.05,
             preset: None,
+            membrane: None,
         };
         let model = ClothModel::from_mesh(&mesh, &fabric, &[]);
         let coloring = model.vertex_coloring();

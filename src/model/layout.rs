@@ -153,6 +153,23 @@ pub struct Hinge {
     pub _pad1: u32,
 }
 
+/// A membrane triangle (WGSL `Membrane`): an orthotropic sheet with its own warp, weft and
+/// shear stiffness (Baraff and Witkin 1998's stretch and shear conditions on the deformation
+/// gradient in the fabric's warp/weft frame; see `cpu::membrane`). The warp and weft
+/// directions' images are w_u = Σⱼ αⱼxⱼ and w_v = Σⱼ βⱼxⱼ, with α₀ = −α₁ − α₂ and
+/// β₀ = −β₁ − β₂; at rest both are unit and orthogonal.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Membrane {
+    /// The triangle's three particles; w unused.
+    pub v: [u32; 4],
+    /// α₁, α₂, β₁, β₂ in 1/m.
+    pub shape: [f32; 4],
+    /// Warp, weft and shear stiffness times the rest area (N·m), and the damping time
+    /// constant τ in s (damping is τ times the stiffness, along the conditions' gradients).
+    pub stiffness: [f32; 4],
+}
+
 /// A seam pair (WGSL `Seam`): vertex `v[0]` is pulled towards
 /// `(1 − weight)·x[v[1]] + weight·x[v[2]]`.
 #[repr(C)]

@@ -9,6 +9,7 @@ mod coloring;
 mod deforming;
 pub mod layout;
 mod levels;
+pub mod membrane;
 pub mod multigrid;
 
 pub use build::BuiltCloth;
@@ -19,7 +20,7 @@ pub use deforming::{build_deforming, MANNEQUIN_GLB_PATH};
 use crate::mesh::TriMesh;
 use crate::scene::Fabric;
 use glam::{Vec3, Vec4};
-use layout::{Hinge, Seam, SpringRef, INTEGRATOR_EXPLICIT};
+use layout::{Hinge, Membrane, Seam, SpringRef, INTEGRATOR_EXPLICIT};
 
 /// A stretch spring between two particles.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,6 +54,9 @@ pub struct ClothModel {
     pub hinges: Vec<Hinge>,
     /// Seam pairs (empty unless the cloth comes from a sewing pattern).
     pub seams: Vec<Seam>,
+    /// Membrane triangles when the fabric is an orthotropic membrane (its springs then carry
+    /// no force: they stay as the mesh's edges, for colouring, strain and the limiter).
+    pub membranes: Vec<Membrane>,
     /// The collision bodies, in scene order.
     pub colliders: Vec<std::sync::Arc<crate::body::Collider>>,
     /// The coarse levels of implicit Euler's multigrid solve (`None`: plain Vertex Block
@@ -164,7 +168,10 @@ impl ClothModel {
             if rest_length <= 0.0 {
                 continue;
             }
-            let stiffness = fabric.stretch_stiffness * edge_area / (rest_length * rest_length);
+            let stiffness = match fabric.membrane {
+                Some(_) => 0.0,
+                None => fabric.stretch_stiffness * edge_area / (rest_length * rest_length),
+            };
             let (ma, mb) = (masses[a as usize], masses[b as usize]);
             let reduced_mass = ma * mb / (ma + mb);
             let damping = 2.0 * fabric.damping_ratio * (stiffness * reduced_mass).sqrt();
@@ -190,6 +197,17 @@ impl ClothModel {
                 });
             }
         }
+        let membranes = match &fabric.membrane {
+            Some(m) => membrane::build_membranes(
+                &mesh.positions,
+                &masses,
+                &mesh.triangles,
+                &membrane::world_grain(mesh.triangles.len(), 0.0, Vec3::Z),
+                m,
+                fabric.damping_ratio,
+            ),
+            None => Vec::new(),
+        };
         ClothModel {
             positions: mesh.positions.clone(),
             velocities: vec![Vec3::ZERO; n],
@@ -199,6 +217,7 @@ impl ClothModel {
             springs,
             hinges,
             seams: Vec::new(),
+            membranes,
             colliders: Vec::new(),
             multigrid: None,
         }
@@ -269,6 +288,32 @@ impl ClothModel {
             }
         }
         Csr::from_pairs(self.len(), &pairs)
+    }
+
+    /// Membrane refs per particle: triangle index · 4 + role (0, 1, 2: its vertices).
+    pub fn membrane_csr(&self) -> Csr<u32> {
+        let mut pairs = Vec::with_capacity(3 * self.membranes.len());
+        for (t, m) in self.membranes.iter().enumerate() {
+            for role in 0..3 {
+                pairs.push((m.v[role], (t * 4 + role) as u32));
+            }
+        }
+        Csr::from_pairs(self.len(), &pairs)
+    }
+
+    /// Lays the membrane's warp along `grain` (one direction per triangle of `triangles`),
+    /// rebuilding it for `fabric` (nothing without a membrane).
+    pub fn set_grain(&mut self, grain: &[Vec3], fabric: &crate::scene::Fabric) {
+        if let Some(m) = &fabric.membrane {
+            self.membranes = membrane::build_membranes(
+                &self.positions,
+                &self.masses,
+                &self.triangles,
+                grain,
+                m,
+                fabric.damping_ratio,
+            );
+        }
     }
 
     /// Seam refs per particle: pair index · 4 + role (0: seam vertex, 1, 2: partner segment
@@ -441,6 +486,7 @@ mod tests {
             bending_stiffness: None,
             damping_ratio: 0.0,
             preset: None,
+            membrane: None,
         };
         let model = ClothModel::from_mesh(&mesh, &fabric, &[]);
         let energy: f64 = model

@@ -79,6 +79,8 @@ pub struct ElementBlocks {
     pub hinges: Vec<[u32; 4]>,
     /// Per seam entry: the blocks of the pair's seam vertex and partner ends; w unused.
     pub seams: Vec<[u32; 4]>,
+    /// Per membrane entry: the blocks of the triangle's three vertices; w unused.
+    pub membranes: Vec<[u32; 4]>,
 }
 
 /// One coarse level and its link to the level below it (the next finer one).
@@ -196,11 +198,15 @@ fn fine_structure(model: &ClothModel) -> (BlockPattern, ElementBlocks) {
     for s in &model.seams {
         clique(&s.v[..3]);
     }
+    for m in &model.membranes {
+        clique(&m.v[..3]);
+    }
     let pattern = BlockPattern::from_pairs(model.len(), &mut pairs);
     let block = |row: u32, column: u32| pattern.find(row, column).expect("in the pattern");
     let springs = model.spring_csr();
     let hinges = model.hinge_csr();
     let seams = model.seam_csr();
+    let membranes = model.membrane_csr();
     let mut blocks = ElementBlocks::default();
     for i in 0..model.len() {
         let row = i as u32;
@@ -216,6 +222,11 @@ fn fine_structure(model: &ClothModel) -> (BlockPattern, ElementBlocks) {
             let s = &model.seams[(seams.items[k as usize] / 4) as usize];
             let b = |r: usize| block(row, s.v[r]);
             blocks.seams.push([b(0), b(1), b(2), 0]);
+        }
+        for k in membranes.offsets[i]..membranes.offsets[i + 1] {
+            let m = &model.membranes[(membranes.items[k as usize] / 4) as usize];
+            let b = |r: usize| block(row, m.v[r]);
+            blocks.membranes.push([b(0), b(1), b(2), 0]);
         }
     }
     (pattern, blocks)
@@ -293,6 +304,7 @@ mod tests {
             bending_stiffness: Some(1e-5),
             damping_ratio: 0.05,
             preset: None,
+            membrane: None,
         };
         let model = ClothModel::from_mesh(&mesh, &fabric, &[]);
         (model, Charted::grid(1.0, 1.0, columns, columns))

@@ -1,6 +1,6 @@
 //! The `[fabric]` table: areal density, stretch and bending stiffness, damping.
 
-use super::presets::{preset, PRESETS};
+use super::presets::{preset, FabricPreset, PRESETS};
 use super::raw::RawFabric;
 use crate::check::Checker;
 use crate::error::InputError;
@@ -18,6 +18,79 @@ pub struct Fabric {
     pub damping_ratio: f32,
     /// The preset the values start from, if any (its look in previews and exports).
     pub preset: Option<&'static str>,
+    /// The orthotropic membrane that replaces the isotropic edge springs (`model =
+    /// "membrane"`); `None`: springs of `stretch_stiffness`.
+    pub membrane: Option<Orthotropic>,
+}
+
+/// An orthotropic membrane's small-strain stiffness, in N/m: uniaxial along the warp and the
+/// weft (lateral edges free) and in-plane shear (shear force per width per radian of
+/// engineering shear strain).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Orthotropic {
+    /// Along the warp (the grain).
+    pub warp: f32,
+    /// Along the weft (across the grain).
+    pub weft: f32,
+    /// In-plane shear.
+    pub shear: f32,
+}
+
+impl Orthotropic {
+    /// The uniaxial stiffness of a strip cut at `angle` radians from the warp, lateral edges
+    /// free: 1/k(θ) = cos⁴θ/k_warp + sin⁴θ/k_weft + sin²θ·cos²θ/k_shear (the classical
+    /// laminate result with no Poisson coupling, which the membrane model has none of).
+    pub fn uniaxial(&self, angle: f32) -> f32 {
+        let (s, c) = angle.sin_cos();
+        let (s2, c2) = (s * s, c * c);
+        1.0 / (c2 * c2 / self.warp + s2 * s2 / self.weft + s2 * c2 / self.shear)
+    }
+}
+
+impl Fabric {
+    /// The stiffest stretch the cloth has, in N/m (the springs', or the membrane's stiffer
+    /// axis): what the stable-step and memory estimates take.
+    pub fn stiffest_stretch(&self) -> f32 {
+        match self.membrane {
+            Some(m) => m.warp.max(m.weft).max(self.stretch_stiffness),
+            None => self.stretch_stiffness,
+        }
+    }
+}
+
+/// Where the membrane's warp runs, in radians from each panel's x axis (a grid's width, an
+/// OBJ mesh's world x turned about world z): `default` everywhere, `panels` per panel name.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Grain {
+    /// The angle of every panel not listed.
+    pub default: f32,
+    /// Per-panel angles (`[fabric.panel_grain_deg]`), checked against the pattern's panels
+    /// when the cloth is built.
+    pub panels: std::collections::BTreeMap<String, f32>,
+}
+
+/// `[fabric] grain_deg` and `[fabric.panel_grain_deg]`.
+pub(super) fn parse_grain(c: &Checker, f: &RawFabric) -> Result<Grain, InputError> {
+    let angle = |key: &str, deg: f64| {
+        if deg.is_finite() {
+            Ok(deg.to_radians() as f32)
+        } else {
+            Err(c.err(
+                "fabric",
+                key,
+                "the grain angle is not finite",
+                "give degrees, such as 45",
+            ))
+        }
+    };
+    let mut panels = std::collections::BTreeMap::new();
+    for (name, &deg) in &f.panel_grain_deg {
+        panels.insert(name.clone(), angle("panel_grain_deg", deg)?);
+    }
+    Ok(Grain {
+        default: angle("grain_deg", f.grain_deg.unwrap_or(0.0))?,
+        panels,
+    })
 }
 
 /// Damping ratio when neither the scene nor a preset gives one.
@@ -92,5 +165,70 @@ pub(super) fn parse(c: &Checker, f: &RawFabric) -> Result<Fabric, InputError> {
             "fractions of critical damping",
         )?,
         preset: preset.map(|p| p.name),
+        membrane: parse_membrane(c, f, preset)?,
     })
+}
+
+/// `model = "membrane"` (the orthotropic membrane, its warp, weft and shear stiffness from the
+/// keys or the preset) or `"springs"` (the default: isotropic edge springs).
+fn parse_membrane(
+    c: &Checker,
+    f: &RawFabric,
+    preset: Option<&FabricPreset>,
+) -> Result<Option<Orthotropic>, InputError> {
+    let keys = [
+        (
+            "warp_stiffness_n_m",
+            f.warp_stiffness_n_m,
+            preset.map(|p| p.warp_stiffness_n_m),
+        ),
+        (
+            "weft_stiffness_n_m",
+            f.weft_stiffness_n_m,
+            preset.map(|p| p.weft_stiffness_n_m),
+        ),
+        (
+            "shear_stiffness_n_m",
+            f.shear_stiffness_n_m,
+            preset.map(|p| p.shear_stiffness_n_m),
+        ),
+    ];
+    match f.model.as_deref() {
+        None | Some("springs") => {
+            if let Some((key, _, _)) = keys.iter().find(|k| k.1.is_some()) {
+                return Err(c.err(
+                    "fabric",
+                    key,
+                    format!("{key} is a membrane stiffness, but the fabric is springs"),
+                    "add model = \"membrane\" to [fabric], or remove the key",
+                ));
+            }
+            Ok(None)
+        }
+        Some("membrane") => {
+            let mut v = [0.0f32; 3];
+            for (out, (key, given, from_preset)) in v.iter_mut().zip(keys) {
+                let value = given.or(from_preset).ok_or_else(|| {
+                    c.err(
+                        "fabric",
+                        key,
+                        format!("missing {key} (model = \"membrane\")"),
+                        format!("give {key}, or a preset that has it (e.g. preset = \"cotton\")"),
+                    )
+                })?;
+                *out = c.positive("fabric", key, value, "N/m")?;
+            }
+            Ok(Some(Orthotropic {
+                warp: v[0],
+                weft: v[1],
+                shear: v[2],
+            }))
+        }
+        Some(other) => Err(c.err(
+            "fabric",
+            "model",
+            format!("unknown fabric model {other:?}"),
+            "use model = \"membrane\" (warp, weft and shear stiffness) or \"springs\"",
+        )),
+    }
 }

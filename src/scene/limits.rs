@@ -42,7 +42,7 @@ struct ClothScale {
 /// The cloth's scale, from the scene alone (`None` for an OBJ mesh, checked once built).
 fn cloth_scale(scene: &Scene) -> Option<ClothScale> {
     let density = scene.fabric.density as f64;
-    let stretch = scene.fabric.stretch_stiffness as f64;
+    let stretch = scene.fabric.stiffest_stretch() as f64;
     match &scene.cloth {
         ClothSource::Grid {
             width,

@@ -16,7 +16,7 @@ mod world;
 
 pub use body::{BodySettings, BodySource, DeformMotion, DeformSettings, MAX_BODIES};
 pub use cloth::ClothSource;
-pub use fabric::{Fabric, HINGE_PER_RIGIDITY};
+pub use fabric::{Fabric, Grain, Orthotropic, HINGE_PER_RIGIDITY};
 pub use pins::{Corner, GridEdge, PinSelection};
 pub use presets::{preset, FabricPreset, PRESETS};
 pub use preview::{
@@ -63,6 +63,8 @@ pub struct Scene {
     pub cloth: ClothSource,
     /// The fabric.
     pub fabric: Fabric,
+    /// Where the membrane's warp runs on each panel.
+    pub grain: Grain,
     /// Pin selections, in file order.
     pub pins: Vec<PinSelection>,
     /// Gravity in m/s².
@@ -145,7 +147,8 @@ impl Scene {
         let c = Checker { path, src };
         let base = path.parent().unwrap_or(Path::new("."));
         let fabric = fabric::parse(&c, &raw.fabric)?;
-        let cloth = cloth::parse(&c, base, raw.cloth, fabric.stretch_stiffness as f64)?;
+        let grain = fabric::parse_grain(&c, &raw.fabric)?;
+        let cloth = cloth::parse(&c, base, raw.cloth, fabric.stiffest_stretch() as f64)?;
         let pins = pins::parse(&c, &raw.pins, &cloth)?;
         let world = world::parse_world(&c, &raw.world)?;
         let wind = world::parse_wind(&c, &raw.wind)?;
@@ -173,6 +176,7 @@ impl Scene {
             source: src.to_string(),
             cloth,
             fabric,
+            grain,
             pins,
             gravity: world.gravity,
             gravity_start: world.gravity_start,

@@ -35,6 +35,12 @@ pub struct FabricPreset {
     pub stretch_stiffness_n_m: f64,
     /// Bending rigidity in N·m.
     pub bending_stiffness_n_m: f64,
+    /// The membrane's small-strain stiffness along the warp, lateral edges free, in N/m.
+    pub warp_stiffness_n_m: f64,
+    /// Along the weft, in N/m.
+    pub weft_stiffness_n_m: f64,
+    /// In-plane shear, in N/m per radian (τ/γ).
+    pub shear_stiffness_n_m: f64,
     /// Spring damping as a fraction of critical.
     pub damping_ratio: f64,
     /// Where the values come from, in one line.
@@ -53,6 +59,11 @@ pub const PRESETS: &[FabricPreset] = &[
         stretch_stiffness_n_m: 4.05e3,
         // ke 0° = 90° = 125.41e-6; √(125.41e-6·125.41e-6) / 4 = 3.135e-5 N·m [D].
         bending_stiffness_n_m: 3.14e-5,
+        // Membrane: u = warp 4033.0, v = weft 4069.9 (lateral-free, above; the W11 files do not
+        // say which axis is the warp: drapekit takes u) [D]. Shear k3/4 = 52 N/m [D].
+        warp_stiffness_n_m: 4033.0,
+        weft_stiffness_n_m: 4069.9,
+        shear_stiffness_n_m: 52.0,
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "W11 royal-target (65/35 cotton/PES woven), proxy for shirting [M/D]",
@@ -67,6 +78,11 @@ pub const PRESETS: &[FabricPreset] = &[
         // ke 0° 64.196e-6, 90° 96.952e-6; √(64.196e-6·96.952e-6) / 4 = 1.972e-5 N·m [D].
         // Cross-check: KES B 0.144–0.227 gf·cm²/cm × 9.80665e-5 = 1.41–2.23e-5 N·m [M→D].
         bending_stiffness_n_m: 1.97e-5,
+        // Membrane: u = warp 410.5, v = weft 2026.8 (lateral-free) [D]. Shear k3/4 = 27 N/m [D]
+        // (KES G of regenerated-cellulose denims: 84–191 N/m/rad [M→D], at larger shear).
+        warp_stiffness_n_m: 410.5,
+        weft_stiffness_n_m: 2026.8,
+        shear_stiffness_n_m: 27.0,
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "W11 11oz-black-denim [M/D]; bending agrees with KES denim [M→D]",
@@ -79,6 +95,12 @@ pub const PRESETS: &[FabricPreset] = &[
         stretch_stiffness_n_m: 500.0,
         // Median of Feng 2022 fabrics under 0.1 kg/m², 2.6e-6 N·m (IQR 1.3–5.1e-6) [P].
         bending_stiffness_n_m: 2.6e-6,
+        // Membrane: no silk measurement; both axes take the stretch note above [2], and shear
+        // takes cotton's measured shear-to-stretch ratio, 52/4051 = 0.0128: 500 × 0.0128 = 6.4
+        // N/m [P].
+        warp_stiffness_n_m: 500.0,
+        weft_stiffness_n_m: 500.0,
+        shear_stiffness_n_m: 6.4,
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "density vendor [low]; stretch ppf note [2]; bending Feng 2022 < 0.1 kg/m² [P]",
@@ -92,6 +114,10 @@ pub const PRESETS: &[FabricPreset] = &[
         stretch_stiffness_n_m: 4.03e3,
         // ke 0° 51.714e-6, 90° 31.283e-6; √(51.714e-6·31.283e-6) / 4 = 1.006e-5 N·m [D].
         bending_stiffness_n_m: 1.01e-5,
+        // Membrane: u = warp 4004.2, v = weft 4055.0 [D]. Shear k3/4 = 9.6 N/m [D].
+        warp_stiffness_n_m: 4004.2,
+        weft_stiffness_n_m: 4055.0,
+        shear_stiffness_n_m: 9.6,
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "W11 white-dots-on-blk (100 % polyester tablecloth) [M/D]",
@@ -106,6 +132,11 @@ pub const PRESETS: &[FabricPreset] = &[
         stretch_stiffness_n_m: 29.8,
         // ke 0° 23.192e-6, 90° 14.268e-6; √(23.192e-6·14.268e-6) / 4 = 4.548e-6 N·m [D].
         bending_stiffness_n_m: 4.55e-6,
+        // Membrane: u = 20.66, v = 42.92 (lateral-free, above) [D]; a knit's wales and courses
+        // stand in for warp and weft. Shear k3/4 = 18 N/m [D].
+        warp_stiffness_n_m: 20.66,
+        weft_stiffness_n_m: 42.92,
+        shear_stiffness_n_m: 18.0,
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "W11 gray-interlock (60/40 cotton/PES knit) [M/D]",
@@ -120,6 +151,11 @@ pub const PRESETS: &[FabricPreset] = &[
         // Feng 2022 fabrics of 0.2–0.3 kg/m²: medians warp 2.0e-5, weft 1.5e-5;
         // √(2.0e-5·1.5e-5) = 1.732e-5 N·m [P].
         bending_stiffness_n_m: 1.73e-5,
+        // Membrane: both axes take the FAST note above [2]; shear takes cotton's measured
+        // shear-to-stretch ratio 0.0128: 3000 × 0.0128 = 38.5 N/m [P].
+        warp_stiffness_n_m: 3.0e3,
+        weft_stiffness_n_m: 3.0e3,
+        shear_stiffness_n_m: 38.5,
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "density assumed; stretch FAST note [2]; bending Feng 2022 0.2–0.3 kg/m² [P]",
@@ -134,6 +170,12 @@ pub const PRESETS: &[FabricPreset] = &[
         // The measured rigidity (9.2–22) has no unit in the abstract, so it is unusable; the
         // Feng 2022 0.2–0.3 kg/m² class is used: √(2.0e-5·1.5e-5) = 1.732e-5 N·m [P].
         bending_stiffness_n_m: 1.73e-5,
+        // Membrane: leather has no weave; isotropic E·t both ways [2], and the isotropic shear
+        // E·t/(2(1 + ν)) with ν = 0.5 (no measured Poisson ratio found; 0.5 is the
+        // incompressible bound, the softest shear): 57 750 / 3 = 19 250 N/m [P].
+        warp_stiffness_n_m: 5.78e4,
+        weft_stiffness_n_m: 5.78e4,
+        shear_stiffness_n_m: 1.925e4,
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "density Unreal [low]; stretch Efendioglu via ppf [2]; bending Feng 2022 [P]",

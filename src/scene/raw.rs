@@ -120,6 +120,13 @@ pub(super) struct RawFabric {
     pub(super) stretch_stiffness_n_m: Option<f64>,
     pub(super) bending_stiffness_n_m: Option<f64>,
     pub(super) damping_ratio: Option<f64>,
+    pub(super) model: Option<String>,
+    pub(super) warp_stiffness_n_m: Option<f64>,
+    pub(super) weft_stiffness_n_m: Option<f64>,
+    pub(super) shear_stiffness_n_m: Option<f64>,
+    pub(super) grain_deg: Option<f64>,
+    #[serde(default)]
+    pub(super) panel_grain_deg: std::collections::BTreeMap<String, f64>,
 }
 
 #[derive(Deserialize, Default)]

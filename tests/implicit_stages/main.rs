@@ -474,21 +474,25 @@ fn line_energy_bound(c: &Case, correction: &[Vec4]) -> f32 {
         springs: (&zeros, &[]),
         hinges: None,
         seams: None,
+        membranes: None,
     };
     let springs = VbdElements {
         springs: all.springs,
         hinges: None,
         seams: None,
+        membranes: None,
     };
     let hinges = VbdElements {
         springs: (&zeros, &[]),
         hinges: all.hinges,
         seams: None,
+        membranes: None,
     };
     let seams = VbdElements {
         springs: (&zeros, &[]),
         hinges: None,
         seams: all.seams,
+        membranes: None,
     };
     let change = |el: &VbdElements, i: usize| {
         c.with_elements(Some(el), |s| {
