@@ -227,7 +227,10 @@ fn parse_membrane(
         Some(other) => Err(c.err(
             "fabric",
             "model",
-            format!("unknown fabric model {other:?}"),
+            format!(
+                "unknown fabric model {other:?}{}",
+                crate::suggest::did_you_mean(other, ["membrane", "springs"].into_iter())
+            ),
             "use model = \"membrane\" (warp, weft and shear stiffness) or \"springs\"",
         )),
     }

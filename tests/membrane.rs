@@ -1,0 +1,335 @@
+//! The orthotropic membrane against its own definition and against mechanics: a sheet stretched
+//! along the warp, the weft and at 45° has the uniaxial stiffness the fabric was given (the
+//! classical off-axis formula at 45°); the force is minus the energy's gradient and the Hessian
+//! blocks its derivative; a rigid rotation costs nothing; and a bias-cut strip hanging under its
+//! own weight stretches as much more than a straight-grain one as the shear stiffness says.
+
+use drapekit::cpu::membrane::{image, membrane_force, MembraneStep};
+use drapekit::mesh::{GridPlane, TriMesh};
+use drapekit::model::layout::Membrane;
+use drapekit::model::membrane::world_grain;
+use drapekit::model::ClothModel;
+use drapekit::scene::{Fabric, Orthotropic, Scene};
+use drapekit::sim::{prepare, simulate, RunStats};
+use glam::{Mat2, Quat, Vec2, Vec3, Vec4};
+
+/// The measured cotton behind the `cotton` preset: warp, weft and shear in N/m.
+const COTTON: Orthotropic = Orthotropic {
+    warp: 4033.0,
+    weft: 4069.9,
+    shear: 52.0,
+};
+
+/// A 0.5 m square sheet of 9 × 9 particles in the xy plane, its warp `grain` radians from x, no
+/// damping (τ = 0: the energy is the elastic energy alone).
+fn sheet(fabric: Orthotropic, grain: f32) -> ClothModel {
+    let mesh = TriMesh::grid(0.5, 0.5, 9, 9, Vec3::ZERO, GridPlane::Xy);
+    let fabric = Fabric {
+        density: 0.2,
+        stretch_stiffness: fabric.warp,
+        bending_stiffness: None,
+        damping_ratio: 0.0,
+        preset: None,
+        membrane: Some(fabric),
+    };
+    let mut model = ClothModel::from_mesh(&mesh, &fabric, &[]);
+    model.set_grain(&world_grain(mesh.triangles.len(), grain, Vec3::Z), &fabric);
+    model
+}
+
+/// The membrane's energy when the sheet at rest `x` is displaced by `u` (the conditions'
+/// change from rest, as the line search computes it).
+fn energy(model: &ClothModel, x: &[Vec4], u: &[Vec4]) -> f32 {
+    let zero = vec![Vec4::ZERO; x.len()];
+    model
+        .membranes
+        .iter()
+        .map(|m| {
+            let step = MembraneStep::at(m, x, &zero);
+            let dw = [image(m, &step.a, u), image(m, &step.b, u)];
+            step.energy_change(m, dw, 1.0)
+        })
+        .sum()
+}
+
+/// The displacement of the homogeneous in-plane strain (εx, εy, γ) (engineering shear) about
+/// the sheet's centre.
+fn strained(model: &ClothModel, s: [f32; 3]) -> Vec<Vec4> {
+    let e = Mat2::from_cols(Vec2::new(s[0], 0.5 * s[2]), Vec2::new(0.5 * s[2], s[1]));
+    model
+        .positions
+        .iter()
+        .map(|p| (e * p.truncate()).extend(0.0).extend(0.0))
+        .collect()
+}
+
+/// The sheet's uniaxial stiffness along x with its lateral strain and shear free: the Schur
+/// complement of the 3×3 stiffness (by central second differences of the energy, which are
+/// exact for a quadratic and cancel the odd terms) over its area.
+fn uniaxial_along_x(model: &ClothModel) -> f32 {
+    let x = model.packed_positions();
+    let delta = 1e-3;
+    let e = |s: [f32; 3]| energy(model, &x, &strained(model, s)) as f64;
+    let unit = |k: usize| {
+        let mut s = [0.0f32; 3];
+        s[k] = delta;
+        s
+    };
+    let mut k = [[0.0f64; 3]; 3];
+    for (a, row) in k.iter_mut().enumerate() {
+        for (b, entry) in row.iter_mut().enumerate() {
+            let (sa, sb) = (unit(a), unit(b));
+            let plus: [f32; 3] = std::array::from_fn(|c| sa[c] + sb[c]);
+            let minus: [f32; 3] = std::array::from_fn(|c| sa[c] - sb[c]);
+            let neg = |s: [f32; 3]| s.map(|v| -v);
+            // ∂²E/∂a∂b = (E(a+b) − E(a−b) − E(−a+b) + E(−a−b)) / (4δ²).
+            *entry = (e(plus) - e(minus) - e(neg(minus)) + e(neg(plus)))
+                / (4.0 * (delta as f64).powi(2));
+        }
+    }
+    // Minimise over (εy, γ): k_xx − k_xr·k_rr⁻¹·k_rx.
+    let det = k[1][1] * k[2][2] - k[1][2] * k[2][1];
+    let inv = [
+        [k[2][2] / det, -k[1][2] / det],
+        [-k[2][1] / det, k[1][1] / det],
+    ];
+    let r = [k[0][1], k[0][2]];
+    let schur = k[0][0]
+        - (r[0] * (inv[0][0] * r[0] + inv[0][1] * r[1])
+            + r[1] * (inv[1][0] * r[0] + inv[1][1] * r[1]));
+    let area = 0.25;
+    (schur / area) as f32
+}
+
+#[test]
+fn stretched_sheet_has_the_stiffness_it_was_given_along_warp_weft_and_bias() {
+    for degrees in [0.0f32, 90.0, 45.0, 30.0] {
+        let grain = degrees.to_radians();
+        let model = sheet(COTTON, grain);
+        let k = uniaxial_along_x(&model);
+        // Pulling along x is pulling at −grain from the warp; 1/k(θ) is even in θ.
+        let expected = COTTON.uniaxial(grain);
+        // The energy is exact per triangle for a homogeneous strain; what is left is the
+        // conditions' higher-order terms at δ = 1e-3, cancelled to O(δ²) by the central
+        // differences, and f32 rounding of energies ~1e-4 J summed over 128 triangles (1e-6
+        // relative), amplified by the Schur complement at most by k_warp/k_shear ≈ 80: 1e-3.
+        let err = (k - expected).abs() / expected;
+        assert!(
+            err < 1e-3,
+            "{degrees}°: {k} N/m, expected {expected} N/m ({err:e})"
+        );
+    }
+    // The bias is 20 times softer than the warp: the shear stiffness, not the stretch, sets it.
+    assert!(COTTON.uniaxial(std::f32::consts::FRAC_PI_4) < COTTON.warp / 19.0);
+}
+
+/// A sheet with its vertices moved randomly by up to `amount` m, warp at 30°.
+fn deformed(amount: f32, seed: u32) -> (ClothModel, Vec<Vec4>) {
+    let model = sheet(COTTON, 30f32.to_radians());
+    let mut state = seed;
+    let mut rand = || {
+        state = state.wrapping_mul(1664525).wrapping_add(1013904223);
+        (state >> 8) as f32 / (1u32 << 24) as f32 - 0.5
+    };
+    let x = model
+        .packed_positions()
+        .iter()
+        .map(|p| *p + amount * Vec4::new(rand(), rand(), rand(), 0.0))
+        .collect();
+    (model, x)
+}
+
+#[test]
+fn force_is_minus_the_energy_gradient() {
+    let (model, x) = deformed(4e-3, 7);
+    let vel = vec![Vec4::ZERO; x.len()];
+    let csr = model.membrane_csr();
+    let zero = vec![Vec4::ZERO; x.len()];
+    let h = 1e-5f32;
+    for i in [0usize, 10, 40, 80] {
+        let mut f = Vec3::ZERO;
+        for &r in &csr.items[csr.offsets[i] as usize..csr.offsets[i + 1] as usize] {
+            f += membrane_force(
+                &model.membranes[(r / 4) as usize],
+                (r % 4) as usize,
+                &x,
+                &vel,
+            );
+        }
+        let mut grad = Vec3::ZERO;
+        for axis in 0..3 {
+            let mut u = zero.clone();
+            u[i][axis] = h;
+            let plus = energy(&model, &x, &u);
+            u[i][axis] = -h;
+            let minus = energy(&model, &x, &u);
+            grad[axis] = (plus - minus) / (2.0 * h);
+        }
+        // Central differences err by h²·|∂³E| (a 6 cm element's third derivative, k·A/L³ ≈
+        // 4000·0.002/2e-4 N/m² ≈ 4e4: 4e-6 N) plus the energies' f32 rounding over 2h (~1e-7
+        // relative of ~1e-3 J per 2e-5 m: 5e-6 N); the forces are ~1e-1 N.
+        let err = (f + grad).length();
+        assert!(
+            err < 1e-3 * f.length() + 2e-5,
+            "vertex {i}: f {f}, ∇E {grad}"
+        );
+    }
+}
+
+#[test]
+fn hessian_blocks_are_the_force_derivative_under_pure_warp_stretch() {
+    // 1% along the warp (here x): w_u stretched, w_v unit and orthogonal, so the shear condition
+    // is zero, the dropped curvature term vanishes and no stretch condition is compressed.
+    let model = sheet(COTTON, 0.0);
+    let x0 = model.packed_positions();
+    let x: Vec<Vec4> = x0
+        .iter()
+        .map(|p| Vec4::new(1.01 * p.x, p.y, p.z, p.w))
+        .collect();
+    let i = 40usize; // an interior vertex
+    let csr = model.membrane_csr();
+    let vel = vec![Vec4::ZERO; x.len()];
+    let force_at = |x: &[Vec4]| {
+        let mut f = Vec3::ZERO;
+        for &r in &csr.items[csr.offsets[i] as usize..csr.offsets[i + 1] as usize] {
+            f += membrane_force(
+                &model.membranes[(r / 4) as usize],
+                (r % 4) as usize,
+                x,
+                &vel,
+            );
+        }
+        f
+    };
+    // The analytic diagonal block at x (displacements from x: none).
+    let zero = vec![Vec4::ZERO; x.len()];
+    let mut block = glam::Mat3::ZERO;
+    for &r in &csr.items[csr.offsets[i] as usize..csr.offsets[i + 1] as usize] {
+        let m: &Membrane = &model.membranes[(r / 4) as usize];
+        let role = (r % 4) as usize;
+        let (f, blocks) = MembraneStep::at(m, &x, &zero).system(m, role, 1.0);
+        block += blocks[role];
+        // Implicit Euler's force and the explicit integrators' are one function (τ = 0), per
+        // triangle (the interior vertex's sum is zero under a uniform stretch): a few ulps.
+        let explicit = membrane_force(m, role, &x, &vel);
+        assert!(
+            (f - explicit).length() <= 1e-5 * explicit.length(),
+            "{f} vs {explicit}"
+        );
+    }
+    let h = 1e-5f32;
+    for axis in 0..3 {
+        let (mut xp, mut xm) = (x.clone(), x.clone());
+        xp[i][axis] += h;
+        xm[i][axis] -= h;
+        // The step as f32 stored it (coordinates of 0.25 m round to 3e-8 m).
+        let step = xp[i][axis] - xm[i][axis];
+        let column = -(force_at(&xp) - force_at(&xm)) / step;
+        // The force is linear in x up to |x|·k/L² terms: central differences err by
+        // h²·∂³f ≈ (1e-5)²·k·A·α³ ≈ 1e-10·4000·0.002·4e3 = 3e-6 N/m; f32 rounding of the forces
+        // (~1e-7 of ~100 N) over 2e-5 m: 1 N/m, against diagonal entries of ~1e4 N/m.
+        let err = (column - block.col(axis)).length();
+        assert!(
+            err < 1e-3 * block.col(axis).length() + 2.0,
+            "axis {axis}: {column} vs {}",
+            block.col(axis)
+        );
+    }
+}
+
+#[test]
+fn rigid_rotation_costs_nothing() {
+    let model = sheet(COTTON, 30f32.to_radians());
+    let q = Quat::from_euler(glam::EulerRot::XYZ, 0.7, -1.1, 0.4);
+    let x: Vec<Vec4> = model
+        .packed_positions()
+        .iter()
+        .map(|p| (q * p.truncate() + Vec3::new(0.3, 1.0, -0.2)).extend(p.w))
+        .collect();
+    let vel = vec![Vec4::ZERO; x.len()];
+    let csr = model.membrane_csr();
+    for i in 0..model.len() {
+        let mut f = Vec3::ZERO;
+        for &r in &csr.items[csr.offsets[i] as usize..csr.offsets[i + 1] as usize] {
+            f += membrane_force(
+                &model.membranes[(r / 4) as usize],
+                (r % 4) as usize,
+                &x,
+                &vel,
+            );
+        }
+        // Coordinates near 1.2 m round by 6e-8 m: edge vectors of 6.25 cm err by 1e-7 m, a
+        // strain of 1.7e-6; times k·A·α ≈ 4000·0.002·16 = 125 N that is 2e-4 N per triangle,
+        // 1.3e-3 N over a vertex's six. A strain of 1e-3 would give ~0.1 N.
+        assert!(f.length() < 1.3e-3, "vertex {i}: {f}");
+    }
+}
+
+/// The lowest row's drop below its rest height after a 0.4 m × 0.1 m strip of cotton hangs
+/// from its top edge for two seconds (implicit Euler, warp `grain_deg` from horizontal).
+fn strip_extension(grain_deg: f32) -> f32 {
+    let toml = format!(
+        r#"
+[cloth.grid]
+width_m = 0.1
+height_m = 0.4
+columns = 6
+rows = 21
+center_m = [0.0, 1.0, 0.0]
+
+[fabric]
+preset = "cotton"
+model = "membrane"
+grain_deg = {grain_deg}
+
+[[pins]]
+edge = "top"
+
+[world]
+gravity_m_s2 = [0.0, -9.81, 0.0]
+air_damping_per_s = 1.0
+
+[solver]
+fps = 24
+frames = 48
+substeps = 4
+integrator = "implicit"
+"#
+    );
+    let scene = Scene::parse(&toml, std::path::Path::new("strip.toml")).expect("the strip parses");
+    let prep = prepare(&scene).expect("prepares");
+    let mut solver = drapekit::cpu::CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let mut last = Vec::new();
+    simulate(&prep, &mut solver, &mut RunStats::default(), |_, s| {
+        last = s.positions.clone();
+        Ok(())
+    })
+    .expect("runs");
+    let bottom = &last[..6];
+    0.8 - bottom.iter().map(|p| p.y).sum::<f32>() / 6.0
+}
+
+#[test]
+fn bias_cut_strip_stretches_as_its_shear_says() {
+    // A strip hanging under its own weight: the load at depth y is ρg(H − y) per width, so a
+    // uniaxial stiffness k stretches it by ρgH²/(2k).
+    let weight = 0.220 * 9.81 * 0.4 * 0.4 / 2.0;
+    let straight = strip_extension(90.0);
+    let expected = weight / COTTON.warp;
+    // Along the warp the membrane has no Poisson coupling, so the strip is uniaxial exactly;
+    // the lumped masses put the discrete load at the rows (1/N² = 0.25% for 20 rows) and the
+    // strip still moves by ~1e-4 m/s after two seconds: 2%.
+    assert!(
+        (straight - expected).abs() < 0.02 * expected,
+        "straight grain: {straight} m, expected {expected} m"
+    );
+    // At 45° the lateral contraction is free except at the pinned top edge, which holds it
+    // over about one width (a quarter of the height, carrying 44% of the stretch): the
+    // extension lies between 56% and 100% of the lateral-free value.
+    let bias = strip_extension(45.0);
+    let free = weight / COTTON.uniaxial(std::f32::consts::FRAC_PI_4);
+    assert!(
+        bias > 0.56 * free && bias < free,
+        "bias: {bias} m, lateral-free {free} m"
+    );
+}
