@@ -178,6 +178,10 @@ struct FabricArgs {
     /// The most frames a specimen may take to settle (default 480; 96 with --quick).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     max_frames: Option<u32>,
+    /// The fabric model: isotropic edge springs, or the orthotropic membrane (the preset's
+    /// warp, weft and shear; cantilevers cut along the warp, the weft and the bias).
+    #[arg(long, default_value = "springs", value_parser = ["springs", "membrane"])]
+    fabric_model: String,
 }
 
 /// `drapekit bench accuracy SCENE --out DIR`.
@@ -306,6 +310,7 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
                     integrator: f.integrator,
                     iterations: f.iterations,
                     max_frames: f.max_frames.unwrap_or(if f.quick { 96 } else { 480 }),
+                    fabric_model: f.fabric_model,
                 },
                 command: std::env::args().collect::<Vec<_>>().join(" "),
             })

@@ -76,7 +76,8 @@ pub fn drape_band(preset: &str) -> Option<Band> {
 pub struct FabricRow {
     /// The preset.
     pub preset: &'static FabricPreset,
-    /// `"cusick"` or `"cantilever"`.
+    /// `"cusick"`, `"cantilever"` (along the warp), `"cantilever_weft"` or
+    /// `"cantilever_bias"`.
     pub test: &'static str,
     /// DC in % (Cusick) or G in N·m (cantilever).
     pub simulated: f64,
@@ -124,6 +125,7 @@ fn cusick_row(
         &dir.join(format!("cusick-{}", p.name)),
         p.name,
         None,
+        0.0,
         Outline::Circle {
             radius: cusick::SPECIMEN_RADIUS_M,
         },
@@ -162,13 +164,29 @@ const CLAMP_M: f64 = 0.01;
 /// square root of the stiffness: leather's 5.8e4 N/m would take 11× the substeps.
 const CANTILEVER_STRETCH_N_M: f64 = 500.0;
 
-/// Bends `p` over the platform edge at overhangs around the elastica's, and finds where its tip
-/// crosses the test line.
+/// The cantilever strips a run cuts: along the warp only for springs (which have no grain);
+/// along the warp, the weft and the bias for a membrane. (test name, grain from the strip's
+/// length in degrees.)
+fn cantilever_cuts(step: &Stepping) -> &'static [(&'static str, f64)] {
+    if step.fabric_model == "membrane" {
+        &[
+            ("cantilever", 0.0),
+            ("cantilever_weft", 90.0),
+            ("cantilever_bias", 45.0),
+        ]
+    } else {
+        &[("cantilever", 0.0)]
+    }
+}
+
+/// Bends `p` cut `grain_deg` from the warp over the platform edge at overhangs around the
+/// elastica's, and finds where its tip crosses the test line.
 fn cantilever_row(
     p: &'static FabricPreset,
     dir: &Path,
     quick: bool,
     step: &Stepping,
+    (test, grain_deg): (&'static str, f64),
 ) -> Result<FabricRow, Error> {
     let (b, w) = (p.bending_stiffness_n_m, p.density_kg_m2 * GRAVITY);
     let expected = cantilever::elastica_overhang(b, w);
@@ -182,7 +200,7 @@ fn cantilever_row(
     let (mut points, mut errors) = (Vec::new(), Vec::new());
     let mut row = FabricRow {
         preset: p,
-        test: "cantilever",
+        test,
         simulated: f64::NAN,
         band: None,
         nodes: None,
@@ -199,9 +217,10 @@ fn cantilever_row(
     for (k, f) in factors.iter().enumerate() {
         let overhang = f * expected;
         let s = specimen::settle(
-            &dir.join(format!("cantilever-{}-{}", p.name, k + 1)),
+            &dir.join(format!("{test}-{}-{}", p.name, k + 1)),
             p.name,
             Some(p.stretch_stiffness_n_m.min(CANTILEVER_STRETCH_N_M)),
+            grain_deg,
             Outline::Strip {
                 x0: -CLAMP_M,
                 x1: overhang,
@@ -287,10 +306,11 @@ pub fn run_cli(opts: &FabricOptions) -> Result<Vec<FabricRow>, Error> {
     let dir = opts.out.join("specimens");
     let mut rows = Vec::new();
     for p in presets {
-        for row in [
-            cusick_row(p, &dir, opts.quick, &opts.stepping)?,
-            cantilever_row(p, &dir, opts.quick, &opts.stepping)?,
-        ] {
+        let row = cusick_row(p, &dir, opts.quick, &opts.stepping)?;
+        println!("{}", report::line(&row));
+        rows.push(row);
+        for &cut in cantilever_cuts(&opts.stepping) {
+            let row = cantilever_row(p, &dir, opts.quick, &opts.stepping, cut)?;
             println!("{}", report::line(&row));
             rows.push(row);
         }

@@ -41,7 +41,7 @@ fn num(v: Option<f64>) -> String {
 /// The cantilever's G/B, and what the standard procedure gives a perfect strip: (l_e/2)³·W/B.
 fn ratios(r: &FabricRow) -> (Option<f64>, Option<f64>) {
     let b = r.preset.bending_stiffness_n_m;
-    if r.test != "cantilever" {
+    if !r.test.starts_with("cantilever") {
         return (None, None);
     }
     let ideal = r
@@ -113,8 +113,9 @@ pub(super) fn line(r: &FabricRow) -> String {
         _ => {
             let (gb, ideal) = ratios(r);
             format!(
-                "{:<9} cantilever  G {:.3e} N·m, G/B {:.3} (perfect strip {:.3}), angle error {:+.2}°, {:.1} s",
+                "{:<9} {:<16} G {:.3e} N·m, G/B {:.3} (perfect strip {:.3}), angle error {:+.2}°, {:.1} s",
                 r.preset.name,
+                r.test,
                 r.simulated,
                 gb.unwrap_or(f64::NAN),
                 ideal.unwrap_or(f64::NAN),
@@ -129,7 +130,7 @@ fn stepping_text(s: &super::Stepping) -> String {
     let steps = s
         .substeps
         .map_or("the stability estimate's".to_string(), |n| n.to_string());
-    match s.integrator.as_str() {
+    let stepping = match s.integrator.as_str() {
         "implicit" => format!(
             "implicit Euler, {steps} steps a frame of {}",
             s.iterations.map_or(
@@ -143,7 +144,12 @@ fn stepping_text(s: &super::Stepping) -> String {
             )
         ),
         other => format!("{other} Euler, {steps} substeps a frame"),
-    }
+    };
+    stepping
+        + match s.fabric_model.as_str() {
+            "membrane" => ", the orthotropic membrane (warp, weft and shear)",
+            _ => ", isotropic edge springs",
+        }
 }
 
 pub(super) fn md_text(rows: &[FabricRow], opts: &FabricOptions) -> String {
@@ -190,14 +196,19 @@ pub(super) fn md_text(rows: &[FabricRow], opts: &FabricOptions) -> String {
          the same procedure (1 but for rounding: at 41.5° the elastica's overhang is twice its \
          bending length); the angle error is the \
          simulated chord angle less the elastica's at the same overhang, averaged over the runs:\n\n\
-         | preset | B (preset) | G simulated | G/B | perfect strip | angle error | overhang | particles | spacing | frames | settled | wall |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|\n"
+         | preset | cut | B (preset) | G simulated | G/B | perfect strip | angle error | overhang | particles | spacing | frames | settled | wall |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
     );
-    for r in rows.iter().filter(|r| r.test == "cantilever") {
+    for r in rows.iter().filter(|r| r.test.starts_with("cantilever")) {
         let (gb, ideal) = ratios(r);
+        let cut = match r.test {
+            "cantilever_weft" => "weft",
+            "cantilever_bias" => "bias (45°)",
+            _ => "warp",
+        };
         let _ = writeln!(
             md,
-            "| {} | {:.3e} N·m | {:.3e} N·m | {:.3} | {:.3} | {:+.2}° | {:.1} mm{} | {} | {:.2} mm | {} | {} | {:.1} s |",
+            "| {} | {cut} | {:.3e} N·m | {:.3e} N·m | {:.3} | {:.3} | {:+.2}° | {:.1} mm{} | {} | {:.2} mm | {} | {} | {:.1} s |",
             r.preset.name,
             r.preset.bending_stiffness_n_m,
             r.simulated,

@@ -44,6 +44,8 @@ pub struct Stepping {
     pub iterations: Option<u32>,
     /// The most frames to wait for the settle rule.
     pub max_frames: u32,
+    /// `"springs"` or `"membrane"` (the preset's warp, weft and shear).
+    pub fabric_model: String,
 }
 
 /// A settled specimen.
@@ -104,7 +106,38 @@ fn pattern_json(outline: Outline) -> String {
     )
 }
 
-fn scene_toml(preset: &str, stretch: Option<f64>, spacing: f64, step: &Stepping) -> String {
+/// The `[fabric]` lines after the preset: the model, the grain and, for a strip whose stretch
+/// is capped at `stretch`, the capped values.
+fn fabric_lines(preset: &str, stretch: Option<f64>, grain_deg: f64, step: &Stepping) -> String {
+    let mut s = String::new();
+    if let Some(k) = stretch {
+        s += &format!(
+            "# Softer than the preset: see docs/src/benchmarks/fabric.md.\n\
+             stretch_stiffness_n_m = {k}\n"
+        );
+    }
+    if step.fabric_model == "membrane" {
+        s += &format!("model = \"membrane\"\ngrain_deg = {grain_deg}\n");
+        if let (Some(k), Some(p)) = (stretch, crate::scene::preset(preset)) {
+            for (key, v) in [
+                ("warp", p.warp_stiffness_n_m),
+                ("weft", p.weft_stiffness_n_m),
+                ("shear", p.shear_stiffness_n_m),
+            ] {
+                s += &format!("{key}_stiffness_n_m = {}\n", v.min(k));
+            }
+        }
+    }
+    s
+}
+
+fn scene_toml(
+    preset: &str,
+    stretch: Option<f64>,
+    grain_deg: f64,
+    spacing: f64,
+    step: &Stepping,
+) -> String {
     let substeps = match step.substeps {
         Some(n) => n.to_string(),
         None => "\"auto\"".to_string(),
@@ -119,10 +152,7 @@ fn scene_toml(preset: &str, stretch: Option<f64>, spacing: f64, step: &Stepping)
          # move the resting shape.\n\
          air_damping_per_s = 10.0\n\n\
          [solver]\nfps = 24\nframes = {}\nsubsteps = {substeps}\nintegrator = \"{}\"\n",
-        stretch.map_or(String::new(), |k| format!(
-            "# Softer than the preset: see docs/src/benchmarks/fabric.md.\n\
-             stretch_stiffness_n_m = {k}\n"
-        )),
+        fabric_lines(preset, stretch, grain_deg, step),
         step.max_frames,
         step.integrator
     );
@@ -136,7 +166,7 @@ fn scene_toml(preset: &str, stretch: Option<f64>, spacing: f64, step: &Stepping)
 pub const SETTLE_WINDOW: usize = 6;
 
 /// Settles `preset` (with its stretch stiffness replaced by `stretch`, N/m, where given) cut to
-/// `outline` at `spacing` (m), with every particle whose rest position `held` accepts pinned,
+/// `outline` with its warp `grain_deg` degrees from x (a membrane fabric) at `spacing` (m), with every particle whose rest position `held` accepts pinned,
 /// in `dir` (created). The specimen has settled once no particle moved more than `tolerance`
 /// (m) over the last [`SETTLE_WINDOW`] frames. (A kinetic-energy rule does not serve here: the
 /// stiff wovens keep a jitter of about 1 mm/s in their in-plane springs long after their shape
@@ -146,6 +176,7 @@ pub fn settle(
     dir: &Path,
     preset: &str,
     stretch: Option<f64>,
+    grain_deg: f64,
     outline: Outline,
     spacing: f64,
     step: &Stepping,
@@ -155,7 +186,7 @@ pub fn settle(
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     write_atomic(&dir.join("specimen.json"), pattern_json(outline).as_bytes())?;
     let path = dir.join("scene.toml");
-    let mut toml = scene_toml(preset, stretch, spacing, step);
+    let mut toml = scene_toml(preset, stretch, grain_deg, spacing, step);
     // A first build finds the particles the rig holds.
     let free = Scene::parse(&toml, &path)?;
     let model = prepare(&free)?.model;
