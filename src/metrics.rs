@@ -1,5 +1,6 @@
 //! Measurements on a read-back state; the same code serves both backends.
 
+use crate::model::layout::Membrane;
 use crate::model::{ClothModel, Spring};
 use crate::pattern::garment::SeamPair;
 use crate::solver::ParticleState;
@@ -32,6 +33,46 @@ pub fn edge_strain_quantile(positions: &[Vec4], springs: &[Spring], q: f32) -> f
     }
     let k = ((q.clamp(0.0, 1.0) * strains.len() as f32).ceil() as usize).clamp(1, strains.len());
     *strains.select_nth_unstable_by(k - 1, f32::total_cmp).1
+}
+
+/// A membrane's strain at the last frame, per triangle along its threads and in shear.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ThreadStrain {
+    /// The largest thread strain (|w_u| − 1 or |w_v| − 1 of any triangle).
+    pub max: f32,
+    /// Its 99th percentile over the triangles (each triangle's larger of the two).
+    pub p99: f32,
+    /// The 99th percentile of the shear angle between warp and weft, in degrees.
+    pub shear_p99_deg: f32,
+}
+
+/// The membrane's thread strain and shear angle at `positions` (`None` without a membrane):
+/// what a designer reads as how much the fabric stretches. Edge strain mixes in shear, which a
+/// woven takes easily.
+pub fn thread_strain(positions: &[Vec4], membranes: &[Membrane]) -> Option<ThreadStrain> {
+    if membranes.is_empty() {
+        return None;
+    }
+    let (mut threads, mut shears) = (Vec::new(), Vec::new());
+    for m in membranes {
+        let x = |r: usize| positions[m.v[r] as usize].truncate();
+        let [a1, a2, b1, b2] = m.shape;
+        let (e1, e2) = (x(1) - x(0), x(2) - x(0));
+        let (wu, wv) = (a1 * e1 + a2 * e2, b1 * e1 + b2 * e2);
+        let (lu, lv) = (wu.length(), wv.length());
+        threads.push((lu - 1.0).max(lv - 1.0));
+        let cos = wu.dot(wv) / (lu * lv).max(f32::MIN_POSITIVE);
+        shears.push(cos.clamp(-1.0, 1.0).asin().abs().to_degrees());
+    }
+    let quantile = |v: &mut Vec<f32>| {
+        let k = ((0.99 * v.len() as f32).ceil() as usize).clamp(1, v.len());
+        *v.select_nth_unstable_by(k - 1, f32::total_cmp).1
+    };
+    Some(ThreadStrain {
+        max: threads.iter().copied().fold(f32::MIN, f32::max),
+        p99: quantile(&mut threads),
+        shear_p99_deg: quantile(&mut shears),
+    })
 }
 
 /// The springs stretched by at least `strain` (0.1 = 10%).

@@ -88,6 +88,11 @@ pub struct Summary {
     /// The 99th percentile of the spring strains at the last frame: what the cloth as a whole
     /// rests at, apart from the few most pinched edges.
     pub last_frame_edge_strain_p99: f32,
+    /// With a membrane fabric: its thread strain (largest and 99th percentile) and shear angle
+    /// (99th percentile, degrees) at the last frame. Edge strain includes shear, which a woven
+    /// takes easily; thread strain is what stretches the yarns.
+    #[serde(default)]
+    pub last_frame_thread_strain: Option<crate::metrics::ThreadStrain>,
     /// The strain-limiting stage's cap on edge stretch (0.1 = 10%), or null when it is off.
     pub strain_limit: Option<f32>,
     /// With the cap on: the edges at it in the last frame (stretched to within 0.1% of the cap

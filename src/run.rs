@@ -519,6 +519,7 @@ fn run_scene_from(
         max_edge_strain: stats.max_edge_strain,
         last_frame_max_edge_strain: stats.last_edge_strain,
         last_frame_edge_strain_p99: stats.last_edge_strain_p99,
+        last_frame_thread_strain: stats.last_thread_strain,
         strain_limit: (prep.plan.contains(crate::plan::Pass::StrainLimit))
             .then_some(prep.params.strain_limit),
         strain_limit_clamped_edges: stats.strain_limit_clamped_edges,

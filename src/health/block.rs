@@ -26,6 +26,17 @@ pub fn block(s: &Summary) -> String {
             100.0 * s.max_edge_strain
         ),
     );
+    if let Some(t) = &s.last_frame_thread_strain {
+        row(
+            "threads",
+            format!(
+                "{:.1}% largest, {:.2}% at the 99th percentile; shear {:.1}° (99th percentile)",
+                100.0 * t.max,
+                100.0 * t.p99,
+                t.shear_p99_deg
+            ),
+        );
+    }
     if let Some(deepest) = s.max_penetration_m {
         let last = match &s.body_show_through {
             Some(t) if t.particles + t.triangles > 0 => format!(

@@ -605,6 +605,7 @@ pub fn simulate_from(
         stats.last_edge_strain = strain;
         stats.last_edge_strain_p99 =
             metrics::edge_strain_quantile(&state.positions, &prep.model.springs, 0.99);
+        stats.last_thread_strain = metrics::thread_strain(&state.positions, &prep.model.membranes);
         if prep.plan.contains(crate::plan::Pass::StrainLimit) {
             let cap = 0.999 * prep.params.strain_limit;
             let springs = &prep.model.springs;

@@ -50,6 +50,9 @@ pub struct RunStats {
     /// The 99th percentile of the springs' strain at the last good frame.
     #[serde(default)]
     pub last_edge_strain_p99: f32,
+    /// A membrane's thread strain and shear at the last good frame.
+    #[serde(default)]
+    pub last_thread_strain: Option<crate::metrics::ThreadStrain>,
     /// Largest particle speed at any output frame, in m/s.
     pub max_speed: f32,
     /// The last frame's mechanical energy (kinetic + gravitational + elastic) and its kinetic
