@@ -44,6 +44,27 @@ pub const STRETCH: MeasuredRange = MeasuredRange {
     source: "from a cotton interlock knit to garment leather (Wang et al. 2011; ISO 3376)",
 };
 
+/// The membrane's warp and weft: the same measured range as the springs' stretch.
+pub const WARP: MeasuredRange = MeasuredRange {
+    key: "warp_stiffness_n_m",
+    ..STRETCH
+};
+
+/// See [`WARP`].
+pub const WEFT: MeasuredRange = MeasuredRange {
+    key: "weft_stiffness_n_m",
+    ..STRETCH
+};
+
+/// In-plane shear: from a polyester jacket fabric's 7.2 N/m (Wang et al. 2011, k3/4) to
+/// garment leather's isotropic E·t/3 = 1.9e4 N/m (the leather preset's proxy).
+pub const SHEAR: MeasuredRange = MeasuredRange {
+    key: "shear_stiffness_n_m",
+    measured: (7.2, 1.93e4),
+    unit: "N/m",
+    source: "from a polyester woven to garment leather (Wang et al. 2011; ISO 3376)",
+};
+
 /// Bending: the scene's hinge coefficient is 4 × the bending rigidity (`HINGE_PER_RIGIDITY`);
 /// Feng et al. 2022's 618 fabrics span rigidities of 3.4e-7 to 2.7e-4 N·m.
 pub const BENDING: MeasuredRange = MeasuredRange {
@@ -82,10 +103,14 @@ pub fn input_warnings(scene: &Scene, bodies: &[Body]) -> Vec<String> {
 
 /// The fabric's values outside `MARGIN` × the measured ranges.
 pub fn fabric_warnings(scene: &Scene, fabric: &Fabric) -> Vec<String> {
+    let m = fabric.membrane;
     let values = [
         (DENSITY, Some(fabric.density as f64)),
         (STRETCH, Some(fabric.stretch_stiffness as f64)),
         (BENDING, fabric.bending_stiffness.map(f64::from)),
+        (WARP, m.map(|m| m.warp as f64)),
+        (WEFT, m.map(|m| m.weft as f64)),
+        (SHEAR, m.map(|m| m.shear as f64)),
     ];
     let mut out = Vec::new();
     for (range, value) in values {
@@ -132,6 +157,9 @@ fn fix(range: &MeasuredRange, v: f64) -> String {
     let example = match range.key {
         "density_kg_m2" => cotton.density_kg_m2,
         "stretch_stiffness_n_m" => cotton.stretch_stiffness_n_m,
+        "warp_stiffness_n_m" => cotton.warp_stiffness_n_m,
+        "weft_stiffness_n_m" => cotton.weft_stiffness_n_m,
+        "shear_stiffness_n_m" => cotton.shear_stiffness_n_m,
         _ => crate::scene::HINGE_PER_RIGIDITY * cotton.bending_stiffness_n_m,
     };
     let meant = (slips.iter())
@@ -221,9 +249,21 @@ mod tests {
     #[test]
     fn every_preset_and_the_range_edges_are_plausible() {
         for p in PRESETS {
-            let s = scene(&format!("preset = \"{}\"", p.name));
-            assert!(fabric_warnings(&s, &s.fabric).is_empty(), "{}", p.name);
+            for model in ["springs", "membrane"] {
+                let s = scene(&format!("preset = \"{}\"\nmodel = \"{model}\"", p.name));
+                assert!(fabric_warnings(&s, &s.fabric).is_empty(), "{}", p.name);
+            }
         }
+        // A shear given in kN/m.
+        let s = scene("preset = \"cotton\"\nmodel = \"membrane\"\nshear_stiffness_n_m = 0.052");
+        let w = fabric_warnings(&s, &s.fabric);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].contains("shear_stiffness_n_m: 0.052 N/m is below"),
+            "{}",
+            w[0]
+        );
+        assert!(w[0].contains("write 52"), "{}", w[0]);
         // Just inside the widened range, and just outside it.
         let s = scene("density_kg_m2 = 1.7\nstretch_stiffness_n_m = 11");
         assert!(fabric_warnings(&s, &s.fabric).is_empty());

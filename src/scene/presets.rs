@@ -227,6 +227,9 @@ mod tests {
             for v in [
                 p.density_kg_m2,
                 p.stretch_stiffness_n_m,
+                p.warp_stiffness_n_m,
+                p.weft_stiffness_n_m,
+                p.shear_stiffness_n_m,
                 p.bending_stiffness_n_m,
                 p.damping_ratio,
             ] {
@@ -286,6 +289,15 @@ mod tests {
             let free_u = k0 - k1 * k1 / k2;
             let free_v = k2 - k1 * k1 / k0;
             let p = get(name);
+            // The membrane takes the axes themselves (u as the warp).
+            assert!(
+                close(p.warp_stiffness_n_m, free_u, 0.005),
+                "{name}: {free_u}"
+            );
+            assert!(
+                close(p.weft_stiffness_n_m, free_v, 0.005),
+                "{name}: {free_v}"
+            );
             let k = (free_u * free_v).sqrt();
             assert!(close(p.stretch_stiffness_n_m, k, 0.005), "{name}: {k}");
             let b = (ke0 * ke90).sqrt() / 4.0;
@@ -300,6 +312,34 @@ mod tests {
         ];
         for (name, g_m2) in densities {
             assert_eq!(get(name).density_kg_m2, g_m2 / 1000.0, "{name}");
+        }
+    }
+
+    #[test]
+    fn membrane_proxies_follow_their_stated_arithmetic() {
+        // Silk and wool: both axes the quoted stretch, shear at cotton's measured ratio.
+        let ratio = get("cotton").shear_stiffness_n_m
+            / (get("cotton").warp_stiffness_n_m * get("cotton").weft_stiffness_n_m).sqrt();
+        for name in ["silk", "wool"] {
+            let p = get(name);
+            assert_eq!(p.warp_stiffness_n_m, p.stretch_stiffness_n_m, "{name}");
+            assert_eq!(p.weft_stiffness_n_m, p.stretch_stiffness_n_m, "{name}");
+            let shear = ratio * p.stretch_stiffness_n_m;
+            assert!(close(p.shear_stiffness_n_m, shear, 0.01), "{name}: {shear}");
+        }
+        // Leather: isotropic, G = E·t / (2(1 + ν)) with ν = 0.5.
+        let p = get("leather");
+        assert!(close(
+            p.shear_stiffness_n_m,
+            p.warp_stiffness_n_m / 3.0,
+            0.005
+        ));
+        // Every woven shears far more easily than it stretches (W11: 1.3% for cotton, 3% for
+        // denim's geometric mean, 0.24% for the polyester tablecloth).
+        for name in ["cotton", "denim", "silk", "polyester", "wool"] {
+            let p = get(name);
+            let stiffer = p.warp_stiffness_n_m.max(p.weft_stiffness_n_m);
+            assert!(p.shear_stiffness_n_m < 0.05 * stiffer, "{name}");
         }
     }
 
