@@ -19,7 +19,7 @@ fn bench_fabric_quick_writes_both_tests_for_silk() {
         out.to_str().unwrap(),
     ]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let (header, rows) = common::read_csv(&out.join("fabric.csv"), "wall_seconds");
+    let (header, rows) = common::read_csv(&out.join("fabric.csv"), "force_residual_rms");
     assert_eq!(header, CSV_COLUMNS);
     assert_eq!(rows.len(), 2);
     let (cusick, cantilever) = (&rows[0], &rows[1]);
@@ -57,6 +57,51 @@ fn bench_fabric_quick_writes_both_tests_for_silk() {
     assert!(md.contains("| silk |"), "{md}");
     // Each specimen is a scene drapekit can run again.
     assert!(out.join("specimens/cusick-silk/scene.toml").is_file());
+}
+
+#[test]
+fn bench_fabric_membrane_cuts_warp_weft_and_bias_and_reports_the_residual() {
+    let out = common::out_dir("bench-fabric", "membrane");
+    let r = common::drapekit(&[
+        "bench",
+        "fabric",
+        "--quick",
+        "--presets",
+        "cotton",
+        "--integrator",
+        "implicit",
+        "--fabric-model",
+        "membrane",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let (_, rows) = common::read_csv(&out.join("fabric.csv"), "force_residual_rms");
+    let tests: Vec<&str> = rows.iter().map(|r| r["test"].as_str()).collect();
+    assert_eq!(
+        tests,
+        ["cusick", "cantilever", "cantilever_weft", "cantilever_bias"]
+    );
+    for row in &rows {
+        // The implicit solve reports how far from balance each specimen ended: well under the
+        // settle rule's 5% of the weight once the shape stopped moving.
+        let residual = common::finite(row, "force_residual_rms");
+        assert!(
+            (0.0..0.05).contains(&residual),
+            "{}: {residual}",
+            row["test"]
+        );
+    }
+    // Bending is isotropic: every cut bends like the preset's B, within the quick test's 10%
+    // (see the springs test above).
+    for row in &rows[1..] {
+        let gb = common::finite(row, "g_over_b") / common::finite(row, "elastica_g_over_b");
+        assert!((gb - 1.0).abs() < 0.1, "{}: G/B {gb}", row["test"]);
+    }
+    // The specimen's scene asks for the membrane, cut on the bias.
+    let scene =
+        std::fs::read_to_string(out.join("specimens/cantilever_bias-cotton-1/scene.toml")).unwrap();
+    assert!(scene.contains("model = \"membrane\"") && scene.contains("grain_deg = 45"));
 }
 
 #[test]

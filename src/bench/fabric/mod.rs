@@ -103,6 +103,9 @@ pub struct FabricRow {
     pub settled: bool,
     /// Simulation seconds (summed over a cantilever's runs).
     pub wall_seconds: f64,
+    /// Implicit Euler's RMS force residual at the end, relative to the weight (the largest
+    /// over a cantilever's runs); `None` for explicit integrators.
+    pub force_residual_rms: Option<f32>,
 }
 
 impl FabricRow {
@@ -151,6 +154,7 @@ fn cusick_row(
         frames: s.frames,
         settled: s.settled_frame.is_some(),
         wall_seconds: s.wall_seconds,
+        force_residual_rms: s.force_residual_rms,
     })
 }
 
@@ -213,6 +217,7 @@ fn cantilever_row(
         frames: 0,
         settled: true,
         wall_seconds: 0.0,
+        force_residual_rms: None,
     };
     for (k, f) in factors.iter().enumerate() {
         let overhang = f * expected;
@@ -242,6 +247,10 @@ fn cantilever_row(
         row.frames += s.frames;
         row.settled &= s.settled_frame.is_some();
         row.wall_seconds += s.wall_seconds;
+        row.force_residual_rms = match (row.force_residual_rms, s.force_residual_rms) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        };
     }
     row.overhang = cantilever::crossing(&points);
     row.simulated = row

@@ -28,6 +28,7 @@ pub const CSV_COLUMNS: &[&str] = &[
     "frames",
     "settled",
     "wall_seconds",
+    "force_residual_rms",
 ];
 
 fn num(v: Option<f64>) -> String {
@@ -69,7 +70,7 @@ pub(super) fn csv_text(rows: &[FabricRow]) -> String {
         let (gb, ideal) = ratios(r);
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3}",
+            "{},{},{},{},{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{}",
             r.preset.name,
             r.test,
             num(Some(r.simulated)),
@@ -91,7 +92,8 @@ pub(super) fn csv_text(rows: &[FabricRow]) -> String {
             r.substeps,
             r.frames,
             if r.settled { "yes" } else { "no" },
-            r.wall_seconds
+            r.wall_seconds,
+            num(r.force_residual_rms.map(f64::from))
         );
     }
     csv
@@ -164,12 +166,12 @@ pub(super) fn md_text(rows: &[FabricRow], opts: &FabricOptions) -> String {
     );
     md += "**Cusick drape test** (30 cm specimen held within an 18 cm disc; DC from the \
            shadow rasterised at 0.5 mm):\n\n\
-           | preset | DC simulated | published | within | nodes | particles | spacing | frames | settled | wall |\n\
-           |---|---|---|---|---|---|---|---|---|---|\n";
+           | preset | DC simulated | published | within | nodes | particles | spacing | frames | settled | force residual | wall |\n\
+           |---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows.iter().filter(|r| r.test == "cusick") {
         let _ = writeln!(
             md,
-            "| {} | {:.1}% | {} | {} | {} | {} | {:.1} mm | {} | {} | {:.1} s |",
+            "| {} | {:.1}% | {} | {} | {} | {} | {:.1} mm | {} | {} | {} | {:.1} s |",
             r.preset.name,
             r.simulated,
             r.band.map_or("not found".to_string(), |b| format!(
@@ -185,6 +187,8 @@ pub(super) fn md_text(rows: &[FabricRow], opts: &FabricOptions) -> String {
             1e3 * r.spacing,
             r.frames,
             if r.settled { "yes" } else { "no" },
+            r.force_residual_rms
+                .map_or("–".to_string(), |f| format!("{f:.1e}")),
             r.wall_seconds
         );
     }

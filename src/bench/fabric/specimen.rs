@@ -67,6 +67,9 @@ pub struct Settled {
     pub particles: usize,
     /// Seconds spent simulating.
     pub wall_seconds: f64,
+    /// Implicit Euler's RMS force residual over the free particles at the last substep, as a
+    /// fraction of their weight (`None` for explicit integrators).
+    pub force_residual_rms: Option<f32>,
 }
 
 /// The panel's GarmentCode JSON (centimetres; the panel is rotated flat onto the xz plane).
@@ -242,5 +245,6 @@ pub fn settle(
         substeps: prep.substeps,
         particles: prep.model.positions.len(),
         wall_seconds: start.elapsed().as_secs_f64(),
+        force_residual_rms: stats.force_residual.map(|(_, rms)| rms),
     })
 }
