@@ -211,7 +211,11 @@ fn variant(
         // The scene format's default limit, 10% over rest length.
         (Effect::StrainLimit, true) => s.solver.strain_limit = s.solver.strain_limit.or(Some(0.1)),
         (Effect::StrainLimit, false) => s.solver.strain_limit = None,
-        (Effect::Membrane, true) => s.fabric.membrane = Some(membrane_of(&s.fabric)),
+        (Effect::Membrane, true) => {
+            s.fabric.membrane = Some(membrane_of(&s.fabric));
+            // The springs' step for both: the automatic step does not count a membrane yet.
+            s.solver.substeps = Some(base.substeps);
+        }
         (Effect::Membrane, false) => s.fabric.membrane = None,
     }
     Ok(Some(prepare(&s)?))
@@ -219,8 +223,7 @@ fn variant(
 
 /// The scene's membrane, else its preset's warp, weft and shear, else an isotropic membrane of
 /// the springs' stiffness (shear a tenth of it, as wovens shear far more easily than they
-/// stretch). Its stiffest direction is the springs' at most, so both plans take the same
-/// substeps; the cost per substep does not depend on the values.
+/// stretch). The cost per substep does not depend on the values.
 fn membrane_of(fabric: &crate::scene::Fabric) -> Orthotropic {
     let k = fabric.stretch_stiffness;
     let from_preset = (fabric.preset.and_then(crate::scene::preset)).map(|p| Orthotropic {
