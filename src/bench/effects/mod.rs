@@ -213,7 +213,7 @@ fn variant(
         (Effect::StrainLimit, false) => s.solver.strain_limit = None,
         (Effect::Membrane, true) => {
             s.fabric.membrane = Some(membrane_of(&s.fabric));
-            // The springs' step for both: the automatic step does not count a membrane yet.
+            // The springs' step for both plans: both time the same substep.
             s.solver.substeps = Some(base.substeps);
         }
         (Effect::Membrane, false) => s.fabric.membrane = None,
