@@ -138,6 +138,7 @@ impl ClothModel {
     ///     bending_stiffness: Some(1e-5),
     ///     damping_ratio: 0.05,
     ///     preset: None,
+    ///     membrane: None,
     /// };
     /// let model = ClothModel::from_mesh(&mesh, &fabric, &[0]);
     /// assert_eq!(model.len(), 121);
