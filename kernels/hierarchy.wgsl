@@ -5,11 +5,13 @@
 @group(0) @binding(18) var<storage, read> hier: array<u32>;
 
 // The header's words: the number of levels, then where the fine matrix's element slots start
-// (cpu: ElementBlocks): one per spring entry, four per hinge entry, four per seam entry.
+// (cpu: ElementBlocks): one per spring entry, four per hinge entry, four per seam entry, four
+// per membrane entry.
 const HIER_LEVELS: u32 = 0u;
 const HIER_SPRING_SLOTS: u32 = 1u;
 const HIER_HINGE_SLOTS: u32 = 2u;
 const HIER_SEAM_SLOTS: u32 = 3u;
+const HIER_MEMBRANE_SLOTS: u32 = 4u;
 // Level headers follow at this word, LEVEL_WORDS each.
 const LEVEL_HEADER: u32 = 8u;
 const LEVEL_WORDS: u32 = 16u;

@@ -71,7 +71,7 @@ fn touching(b: u32, i: u32, d: vec3<f32>) -> bool {
 
 // The vertex's constant stiffness times CONTACT_RATIO: the mean diagonal of what does not
 // depend on the state (inertia, air damping, each spring's (k + c/h)/3, each seam pair's
-// share²·(k + c/h)).
+// share²·(k + c/h), each membrane's constant_stiffness).
 fn contact_stiffness(i: u32) -> f32 {
     let h = params.dt;
     let mass = 1.0 / prev(i).w;
@@ -83,6 +83,7 @@ fn contact_stiffness(i: u32) -> f32 {
         sum = sum + (s.stiffness + s.damping / h) / 3.0;
     }
     sum = add_seam_stiffness(i, sum);
+    sum = add_membrane_stiffness(i, sum);
     return CONTACT_RATIO * sum;
 }
 
@@ -150,6 +151,7 @@ fn vertex_system(i: u32, bodies: u32, assembling: bool) -> VertexSystem {
     }
 
     add_hinges(i, assembling, &f, &hess);
+    add_membranes(i, assembling, &f, &hess);
     add_seams(i, assembling, &f, &hess);
 
     if (bodies > 0u) {
@@ -387,6 +389,232 @@ fn add_seam_stiffness(i: u32, sum_in: f32) -> f32 {
 }
 // end seams
 
+// ---- The orthotropic membrane (warp, weft and shear conditions on each triangle). ----
+// CPU twin: MembraneStep in src/cpu/membrane.rs, which documents the terms; the functions here
+// follow it line for line, in the same order of sums.
+// section membrane
+@group(0) @binding(33) var membrane_offsets: texture_2d<u32>;    // r32uint, N + 1 entries
+@group(0) @binding(34) var membrane_refs: texture_2d<u32>;       // r32uint: triangle * 4 + role
+@group(0) @binding(35) var membranes: texture_2d<u32>;           // three texels per Membrane
+
+fn membrane_at(t: u32) -> Membrane {
+    return unpack_membrane(
+        textureLoad(membranes, texel(3u * t), 0),
+        textureLoad(membranes, texel(3u * t + 1u), 0),
+        textureLoad(membranes, texel(3u * t + 2u), 0),
+    );
+}
+
+// The per-vertex coefficients (−c1 − c2, c1, c2) of an image from its shape pair (cpu:
+// membrane::coefficients).
+fn membrane_coefficients(c1: f32, c2: f32) -> vec3<f32> {
+    return vec3<f32>(-c1 - c2, c1, c2);
+}
+
+// Σ c_r·xₙ[v_r] as c₁(x₁ − x₀) + c₂(x₂ − x₀) (cpu: membrane::image over the start positions).
+fn membrane_start_image(m: Membrane, c: vec3<f32>) -> vec3<f32> {
+    let x0 = prev(m.v.x).xyz;
+    return c.y * (prev(m.v.y).xyz - x0) + c.z * (prev(m.v.z).xyz - x0);
+}
+
+// The same combination of the displacements D.
+fn membrane_disp_image(m: Membrane, c: vec3<f32>) -> vec3<f32> {
+    let d0 = disp[m.v.x].xyz;
+    return c.y * (disp[m.v.y].xyz - d0) + c.z * (disp[m.v.z].xyz - d0);
+}
+
+// A membrane in the step: coefficients a (of w_u) and b (of w_v), the images at the start of
+// the step and their changes so far (cpu: MembraneStep::at).
+struct MembraneStep {
+    a: vec3<f32>,
+    b: vec3<f32>,
+    start_u: vec3<f32>,
+    start_v: vec3<f32>,
+    change_u: vec3<f32>,
+    change_v: vec3<f32>,
+}
+
+fn membrane_step(m: Membrane) -> MembraneStep {
+    let a = membrane_coefficients(m.shape.x, m.shape.y);
+    let b = membrane_coefficients(m.shape.z, m.shape.w);
+    return MembraneStep(
+        a,
+        b,
+        membrane_start_image(m, a),
+        membrane_start_image(m, b),
+        membrane_disp_image(m, a),
+        membrane_disp_image(m, b),
+    );
+}
+
+// |w| − 1 for w = s + dw, as (|s| − 1) plus the change's share (cpu: MembraneStep::stretch).
+fn membrane_stretch(s: vec3<f32>, dw: vec3<f32>) -> f32 {
+    let start_len = length(s);
+    let len = length(s + dw);
+    let grow = 2.0 * dot(s, dw) + dot(dw, dw);
+    let sum = len + start_len;
+    var share = 0.0;
+    if (sum > 0.0) {
+        share = grow / sum;
+    }
+    return (start_len - 1.0) + share;
+}
+
+// Hessian of ½(|w| − 1)² in w, made positive semi-definite (cpu: membrane::stretch_hessian).
+fn membrane_stretch_hessian(n: vec3<f32>, len: f32) -> mat3x3<f32> {
+    let nn = outer(n, n);
+    return nn + max(1.0 - 1.0 / len, 0.0) * (identity() - nn);
+}
+
+// A membrane's force on one vertex and its Hessian blocks towards the triangle's three
+// vertices (cpu: the return value of MembraneStep::system).
+struct MembraneSystem {
+    f: vec3<f32>,
+    blocks: array<mat3x3<f32>, 3>,
+}
+
+// One stretch condition (start image s, change dw, stiffness k, per-vertex coefficients c) added
+// to `sys` for vertex `role` (cpu: one pass of the condition loop in MembraneStep::system).
+fn add_stretch_condition(
+    sys: ptr<function, MembraneSystem>,
+    s: vec3<f32>,
+    dw: vec3<f32>,
+    k: f32,
+    c: vec3<f32>,
+    role: u32,
+    damp: f32,
+) {
+    let w = s + dw;
+    let len = length(w);
+    let cr = c[role];
+    if (len > 1e-12) {
+        let n = w / len;
+        (*sys).f = (*sys).f - k * cr * membrane_stretch(s, dw) * n;
+        let hess = k * membrane_stretch_hessian(n, len);
+        for (var o = 0u; o < 3u; o = o + 1u) {
+            (*sys).blocks[o] = (*sys).blocks[o] + (cr * c[o]) * hess;
+        }
+    }
+    let start_len = length(s);
+    if (start_len > 1e-12) {
+        let n = s / start_len;
+        (*sys).f = (*sys).f - damp * k * cr * dot(n, dw) * n;
+        let nn = outer(n, n);
+        for (var o = 0u; o < 3u; o = o + 1u) {
+            (*sys).blocks[o] = (*sys).blocks[o] + (damp * k * cr * c[o]) * nn;
+        }
+    }
+}
+
+// The force −∇G on vertex `role` and the Hessian blocks (role, o) of membrane m in a step of
+// h s (cpu: MembraneStep::system).
+fn membrane_system(st: MembraneStep, m: Membrane, role: u32, h: f32) -> MembraneSystem {
+    let k = m.stiffness;
+    let damp = k.w / h;
+    var sys = MembraneSystem(vec3<f32>(0.0), array<mat3x3<f32>, 3>());
+    add_stretch_condition(&sys, st.start_u, st.change_u, k.x, st.a, role, damp);
+    add_stretch_condition(&sys, st.start_v, st.change_v, k.y, st.b, role, damp);
+    let wu = st.start_u + st.change_u;
+    let wv = st.start_v + st.change_v;
+    let g = st.a[role] * wv + st.b[role] * wu;
+    sys.f = sys.f - k.z * dot(wu, wv) * g;
+    let g0 = st.a[role] * st.start_v + st.b[role] * st.start_u;
+    let q = dot(st.start_v, st.change_u) + dot(st.start_u, st.change_v);
+    sys.f = sys.f - damp * k.z * q * g0;
+    for (var o = 0u; o < 3u; o = o + 1u) {
+        let go = st.a[o] * wv + st.b[o] * wu;
+        let go0 = st.a[o] * st.start_v + st.b[o] * st.start_u;
+        sys.blocks[o] = sys.blocks[o] + (k.z * outer(g, go) + (damp * k.z) * outer(g0, go0));
+    }
+    return sys;
+}
+
+// One stretch condition's share of the energy change when its image changes by `step`, added
+// to e (cpu: one pass of the condition loop in MembraneStep::energy_change).
+fn add_stretch_change(e_in: f32, s: vec3<f32>, dw: vec3<f32>, step: vec3<f32>, k: f32, damp: f32) -> f32 {
+    let w = s + dw;
+    let len = length(w);
+    let len2 = length(w + step);
+    let grow = 2.0 * dot(w, step) + dot(step, step);
+    // (|w'| − 1)² − (|w| − 1)² = ds·(2s + ds), ds = |w'| − |w| without cancellation.
+    var ds = 0.0;
+    if (len + len2 > 0.0) {
+        ds = grow / (len + len2);
+    }
+    var e = e_in + 0.5 * k * ds * (2.0 * membrane_stretch(s, dw) + ds);
+    let start_len = length(s);
+    if (start_len > 1e-12) {
+        let n = s / start_len;
+        let q = dot(n, dw);
+        let dq = dot(n, step);
+        e = e + 0.5 * damp * k * dq * (2.0 * q + dq);
+    }
+    return e;
+}
+
+// The change of membrane m's energy (elastic and damping) when its images change by du, dv
+// (cpu: MembraneStep::energy_change).
+fn membrane_energy_change(st: MembraneStep, m: Membrane, du: vec3<f32>, dv: vec3<f32>, h: f32) -> f32 {
+    let k = m.stiffness;
+    let damp = k.w / h;
+    let wu = st.start_u + st.change_u;
+    let wv = st.start_v + st.change_v;
+    var e = add_stretch_change(0.0, st.start_u, st.change_u, du, k.x, damp);
+    e = add_stretch_change(e, st.start_v, st.change_v, dv, k.y, damp);
+    let shear = dot(wu, wv);
+    let d_shear = dot(du, wv) + dot(wu, dv) + dot(du, dv);
+    e = e + 0.5 * k.z * d_shear * (2.0 * shear + d_shear);
+    let q = dot(st.start_v, st.change_u) + dot(st.start_u, st.change_v);
+    let dq = dot(st.start_v, du) + dot(st.start_u, dv);
+    return e + 0.5 * damp * k.z * dq * (2.0 * q + dq);
+}
+
+fn add_membranes(i: u32, assembling: bool, f: ptr<function, vec3<f32>>, hess: ptr<function, mat3x3<f32>>) {
+    let h = params.dt;
+    let first = textureLoad(membrane_offsets, texel(i), 0).x;
+    let end = textureLoad(membrane_offsets, texel(i + 1u), 0).x;
+    for (var k = first; k < end; k = k + 1u) {
+        let r = textureLoad(membrane_refs, texel(k), 0).x;
+        let m = membrane_at(r / 4u);
+        let role = r % 4u;
+        var sys = membrane_system(membrane_step(m), m, role, h);
+        *f = *f + sys.f;
+        *hess = *hess + sys.blocks[role];
+        if (assembling) {
+            for (var other = 0u; other < 3u; other = other + 1u) {
+                if (other != role && is_free(m.v[other])) {
+                    sink(membrane_slot(k, other), sys.blocks[other]);
+                }
+            }
+        }
+    }
+}
+
+// Each membrane's k·c_r²·(1 + τ/h) per condition, over 3 (cpu: MembraneStep::constant_stiffness).
+fn add_membrane_stiffness(i: u32, sum_in: f32) -> f32 {
+    let h = params.dt;
+    var sum = sum_in;
+    let first = textureLoad(membrane_offsets, texel(i), 0).x;
+    let end = textureLoad(membrane_offsets, texel(i + 1u), 0).x;
+    for (var k = first; k < end; k = k + 1u) {
+        let r = textureLoad(membrane_refs, texel(k), 0).x;
+        let m = membrane_at(r / 4u);
+        let role = r % 4u;
+        let ar = membrane_coefficients(m.shape.x, m.shape.y)[role];
+        let br = membrane_coefficients(m.shape.z, m.shape.w)[role];
+        let s = m.stiffness;
+        sum = sum + (1.0 + s.w / h) * (s.x * ar * ar + s.y * br * br + s.z * (ar * ar + br * br)) / 3.0;
+    }
+    return sum;
+}
+// else membrane
+fn add_membranes(i: u32, assembling: bool, f: ptr<function, vec3<f32>>, hess: ptr<function, mat3x3<f32>>) {}
+fn add_membrane_stiffness(i: u32, sum_in: f32) -> f32 {
+    return sum_in;
+}
+// end membrane
+// ---- end of the membrane ----
+
 // section assemble
 // The fine matrix's blocks and where each element's go (assemble.wgsl binds them).
 fn sink(slot: u32, m: mat3x3<f32>) {
@@ -401,6 +629,9 @@ fn hinge_slot(k: u32, role: u32) -> u32 {
 fn seam_slot(k: u32, role: u32) -> u32 {
     return hier[hier[HIER_SEAM_SLOTS] + 4u * k + role];
 }
+fn membrane_slot(k: u32, role: u32) -> u32 {
+    return hier[hier[HIER_MEMBRANE_SLOTS] + 4u * k + role];
+}
 // else assemble
 fn sink(slot: u32, m: mat3x3<f32>) {}
 fn spring_slot(k: u32) -> u32 {
@@ -410,6 +641,9 @@ fn hinge_slot(k: u32, role: u32) -> u32 {
     return 0u;
 }
 fn seam_slot(k: u32, role: u32) -> u32 {
+    return 0u;
+}
+fn membrane_slot(k: u32, role: u32) -> u32 {
     return 0u;
 }
 // end assemble

@@ -1,9 +1,9 @@
 // The change of the incremental potential G along the correction c at each of the line
 // search's step lengths, counted at each vertex (its own terms: inertia, air damping, contact,
-// friction; and the elements it owns: a spring at its lower-numbered end, a hinge and a seam
-// pair at their first vertex) and summed per workgroup by tree_sum (xyz: one step length
-// each). Each change is a difference of nearby quantities, not G(x + αc) − G(x), so it keeps
-// its precision however large G is. CPU twin: line_energy in src/cpu/line_energy.rs and
+// friction; and the elements it owns: a spring at its lower-numbered end, a hinge, a membrane
+// triangle and a seam pair at their first vertex) and summed per workgroup by tree_sum (xyz:
+// one step length each). Each change is a difference of nearby quantities, not
+// G(x + αc) − G(x), so it keeps its precision however large G is. CPU twin: line_energy in src/cpu/line_energy.rs and
 // Implicit::energy_change in src/cpu/implicit_terms.rs.
 
 @group(0) @binding(21) var<storage, read> correction: array<vec4<f32>>;
@@ -103,6 +103,7 @@ fn energy_change(i: u32) -> vec3<f32> {
         }
     }
     add_hinge_changes(i, &out);
+    add_membrane_changes(i, &out);
     add_seam_changes(i, &out);
     return out;
 }
@@ -136,6 +137,38 @@ fn add_hinge_changes(i: u32, out: ptr<function, vec3<f32>>) {
 // else bending
 fn add_hinge_changes(i: u32, out: ptr<function, vec3<f32>>) {}
 // end bending
+
+// section membrane
+// Σ c_r·c[v_r] of the correction, as membrane_start_image does for xₙ.
+fn membrane_correction_image(m: Membrane, c: vec3<f32>) -> vec3<f32> {
+    let c0 = correction[m.v.x].xyz;
+    return c.y * (correction[m.v.y].xyz - c0) + c.z * (correction[m.v.z].xyz - c0);
+}
+
+// Each membrane's change, counted at its first vertex (cpu: the membrane loop of
+// Implicit::energy_change).
+fn add_membrane_changes(i: u32, out: ptr<function, vec3<f32>>) {
+    let h = params.dt;
+    let first = textureLoad(membrane_offsets, texel(i), 0).x;
+    let end = textureLoad(membrane_offsets, texel(i + 1u), 0).x;
+    for (var t = first; t < end; t = t + 1u) {
+        let r = textureLoad(membrane_refs, texel(t), 0).x;
+        if (r % 4u != 0u) {
+            continue;
+        }
+        let m = membrane_at(r / 4u);
+        let st = membrane_step(m);
+        let du = membrane_correction_image(m, st.a);
+        let dv = membrane_correction_image(m, st.b);
+        for (var k = 0u; k < 3u; k = k + 1u) {
+            let a = LINE_ALPHAS[k];
+            (*out)[k] = (*out)[k] + membrane_energy_change(st, m, a * du, a * dv, h);
+        }
+    }
+}
+// else membrane
+fn add_membrane_changes(i: u32, out: ptr<function, vec3<f32>>) {}
+// end membrane
 
 // section seams
 fn add_seam_changes(i: u32, out: ptr<function, vec3<f32>>) {

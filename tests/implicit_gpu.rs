@@ -1,6 +1,7 @@
 //! Implicit Euler's solve on the GPU: its kernels validate and bind what they declare, their
 //! shared structs match the Rust mirrors, and on lavapipe every stage matches its CPU twin
-//! from identical inputs, and a small sewn garment's trajectory matches the CPU's.
+//! from identical inputs, and a small sewn garment's trajectory matches the CPU's (with edge
+//! springs, and as an orthotropic membrane).
 
 mod common;
 
@@ -151,8 +152,7 @@ use drapekit::solver::Solver;
 /// The sewn skirt on the mannequin (1,166 particles, three coarse levels) at 3 substeps a frame,
 /// gravity on from the start: seams closing, hinges, contact and friction against the body, all
 /// in the solve.
-fn skirt() -> Prepared {
-    let mut scene = Scene::load(&fixture("scenes/skirt_rotating_implicit.toml")).unwrap();
+fn skirt(mut scene: Scene) -> Prepared {
     scene.solver.substeps = Some(3);
     scene.gravity_start = 0.0;
     prepare(&scene).unwrap()
@@ -160,6 +160,27 @@ fn skirt() -> Prepared {
 
 #[test]
 fn trajectory_parity_sewn_skirt() {
+    let prep = skirt(Scene::load(&fixture("scenes/skirt_rotating_implicit.toml")).unwrap());
+    assert!(prep.model.multigrid.is_some() && !prep.model.seams.is_empty());
+    trajectory_within_rounding_spread(&prep);
+}
+
+#[test]
+fn trajectory_parity_membrane_skirt() {
+    // The same skirt as a denim membrane with its warp at 30° on both panels: the membrane's
+    // terms in every stage of the solve, and no spring.
+    let scene = common::scene_with_fabric(
+        "scenes/skirt_rotating_implicit.toml",
+        common::MEMBRANE_GRAIN_30,
+    );
+    let prep = skirt(scene);
+    assert!(!prep.model.membranes.is_empty() && prep.model.multigrid.is_some());
+    trajectory_within_rounding_spread(&prep);
+}
+
+/// Runs 3 frames of `prep` on the CPU, on the GPU and on the CPU with rounding-sized noise,
+/// and compares the GPU's distance from the CPU with the noisy run's.
+fn trajectory_within_rounding_spread(prep: &Prepared) {
     // The skirt being sewn is not at rest and its solve not converged: the trajectory amplifies
     // rounding-sized differences, so no fixed bound holds for long. What holds is that the
     // GPU's trajectory stays within the spread rounding makes: the CPU's own run with noise of
@@ -169,8 +190,6 @@ fn trajectory_parity_sewn_skirt() {
     // so the GPU may separate from the CPU by a few times the noisy run's separation: 8×, which
     // leaves 2× for the randomness of one noisy run.
     let Some(ctx) = gpu() else { return };
-    let prep = skirt();
-    assert!(prep.model.multigrid.is_some() && !prep.model.seams.is_empty());
     let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
     let mut noisy = CpuSolver::new(&prep.model, prep.params, &prep.plan);
     let batch = prep.substeps as usize;
@@ -182,7 +201,7 @@ fn trajectory_parity_sewn_skirt() {
     let noise = x_max * f32::EPSILON / 2.0;
     let mut rng = common::Rng::new(5);
     for frame in 1..=3 {
-        let steps = substep_params(&prep, frame);
+        let steps = substep_params(prep, frame);
         cpu.advance(&steps).unwrap();
         gpu.advance(&steps).unwrap();
         for step in &steps {

@@ -10,6 +10,9 @@ use wgpu::TextureFormat::{R32Float, R32Uint, Rgba32Uint};
 #[derive(Clone, Copy)]
 pub(super) enum Elements {
     Springs,
+    /// The spring arrays with no spring in them (implicit Euler's solve of a membrane, whose
+    /// springs carry no force).
+    NoSprings,
     Hinges,
     /// Hinge offsets (their total counts the hinges), the hinges and their slots (for
     /// `hinge_forces`).
@@ -86,6 +89,17 @@ pub(super) fn element_arrays(
             vec![
                 (offsets, R32Uint, bytes(bytemuck::cast_slice(&csr.offsets))),
                 (items, Rgba32Uint, bytes(bytemuck::cast_slice(&csr.items))),
+            ]
+        }
+        Elements::NoSprings => {
+            let offsets = vec![0u32; model.len() + 1];
+            vec![
+                (
+                    "spring_offsets",
+                    R32Uint,
+                    bytes(bytemuck::cast_slice(&offsets)),
+                ),
+                ("springs", Rgba32Uint, Vec::new()),
             ]
         }
         Elements::HingeSlots => {

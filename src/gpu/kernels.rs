@@ -44,22 +44,26 @@ pub struct VbdEnergies {
     pub seams: bool,
     /// Body contact.
     pub body: bool,
+    /// The orthotropic membrane (implicit Euler's membrane terms).
+    pub membrane: bool,
 }
 
 impl VbdEnergies {
     /// Every combination, for validation.
-    pub const ALL: [VbdEnergies; 8] = {
+    pub const ALL: [VbdEnergies; 16] = {
         let mut all = [VbdEnergies {
             bending: false,
             seams: false,
             body: false,
-        }; 8];
+            membrane: false,
+        }; 16];
         let mut k = 0;
-        while k < 8 {
+        while k < 16 {
             all[k] = VbdEnergies {
                 bending: k & 1 != 0,
                 seams: k & 2 != 0,
                 body: k & 4 != 0,
+                membrane: k & 8 != 0,
             };
             k += 1;
         }
@@ -71,7 +75,7 @@ impl VbdEnergies {
 /// forces summed so far get `previous_force` from `input` (appended, so that line numbers in
 /// the stage file stay offset by `common.wgsl` only).
 pub fn compose(pass: Pass, input: ForceInput) -> String {
-    compose_with(pass, input, VbdEnergies::ALL[7])
+    compose_with(pass, input, VbdEnergies::ALL[15])
 }
 
 /// `compose`, keeping only the sections of the energies in `energies`. Dropped lines become
@@ -90,6 +94,7 @@ pub fn compose_with(pass: Pass, input: ForceInput, energies: VbdEnergies) -> Str
         "bending" => energies.bending,
         "seams" => energies.seams,
         "body" => energies.body,
+        "membrane" => energies.membrane,
         _ => true,
     };
     let body = keep_sections(pass.kernel_source(), enabled);

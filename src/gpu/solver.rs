@@ -140,13 +140,6 @@ impl GpuSolver {
                 "a deforming body collides on the CPU path only (--backend cpu)".into(),
             ));
         }
-        // The implicit kernels have no membrane terms yet.
-        if plan.contains(Pass::VbdSolve) && !model.membranes.is_empty() {
-            return Err(Error::Gpu(
-                "implicit Euler with a membrane fabric runs on the CPU path only (--backend cpu)"
-                    .into(),
-            ));
-        }
         let state_usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC;
         let mut labels = vec!["params", "positions", "velocities", "forces", "staging"];
         let params_buf = ctx
@@ -261,6 +254,7 @@ impl GpuSolver {
             bending: !model.hinges.is_empty(),
             seams: !model.seams.is_empty(),
             body: plan.contains(Pass::CollideBody),
+            membrane: !model.membranes.is_empty(),
         };
         let dispatch_for = |threads: u32| {
             let total = threads.div_ceil(WORKGROUP_SIZE).max(1);
@@ -292,6 +286,7 @@ impl GpuSolver {
                     bending: hinge_forces.is_some(),
                     seams: false,
                     body: false,
+                    membrane: false,
                 },
                 _ => energies,
             };

@@ -138,6 +138,7 @@ impl ClothModel {
     ///     bending_stiffness: Some(1e-5),
     ///     damping_ratio: 0.05,
     ///     preset: None,
+    ///     membrane: None,
     /// };
     /// let model = ClothModel::from_mesh(&mesh, &fabric, &[0]);
     /// assert_eq!(model.len(), 121);
@@ -361,8 +362,9 @@ impl ClothModel {
         self.stable_step(integrator, air_damping).map(|(dt, _)| dt)
     }
 
-    /// `stable_dt` and what sets it: `"stretch"`, `"seam"` or `"bending"` (the largest term of
-    /// the fastest particle's Gershgorin sum), or `"damping"` (the damping rate bound).
+    /// `stable_dt` and what sets it: `"stretch"` (springs or membrane), `"seam"` or `"bending"`
+    /// (the largest term of the fastest particle's Gershgorin sum), or `"damping"` (the damping
+    /// rate bound).
     pub fn stable_step(&self, integrator: u32, air_damping: f32) -> Option<(f32, &'static str)> {
         let n = self.len();
         let mut k_sum = vec![0.0f32; n];
@@ -424,6 +426,26 @@ impl ClothModel {
             for v in h.v {
                 k_sum[v as usize] += k_hinge;
                 parts[v as usize][2] += k_hinge;
+            }
+        }
+        // A membrane triangle's Hessian at rest (|w_u| = |w_v| = 1, w_u ⟂ w_v: the stretch
+        // conditions' transverse terms vanish) has blocks k_u·a_r·a_s·ŵ_uŵ_uᵀ + k_v·b_r·b_s·ŵ_vŵ_vᵀ
+        // + k_s·g_r·g_sᵀ with |g_r|² = a_r² + b_r² (`cpu::membrane`); the sum of its block
+        // norms along vertex r's row bounds the row, of which the springs' 2k convention takes
+        // half. Its damping is τ times the same.
+        for m in &self.membranes {
+            let [a1, a2, b1, b2] = m.shape;
+            let (a, b) = ([-a1 - a2, a1, a2], [-b1 - b2, b1, b2]);
+            let [ku, kv, ks, tau] = m.stiffness;
+            let g = |r: usize| (a[r] * a[r] + b[r] * b[r]).sqrt();
+            for r in 0..3 {
+                let row: f32 = (0..3)
+                    .map(|s| ku * (a[r] * a[s]).abs() + kv * (b[r] * b[s]).abs() + ks * g(r) * g(s))
+                    .sum();
+                let v = m.v[r] as usize;
+                k_sum[v] += 0.5 * row;
+                parts[v][0] += 0.5 * row;
+                c_sum[v] += 0.5 * tau * row;
             }
         }
         let mut omega_sq_max = 0.0f32;

@@ -198,7 +198,18 @@ pub fn pinched() -> (
     ParticleState,
     drapekit::model::layout::SubstepParams,
 ) {
-    let scene = drapekit::scene::Scene::load(&fixture("scenes/cloth_pinched.toml")).unwrap();
+    pinched_with("")
+}
+
+/// `pinched` with `fabric` added to the scene's `[fabric]` table (see `scene_with_fabric`).
+pub fn pinched_with(
+    fabric: &str,
+) -> (
+    drapekit::sim::Prepared,
+    ParticleState,
+    drapekit::model::layout::SubstepParams,
+) {
+    let scene = scene_with_fabric("scenes/cloth_pinched.toml", fabric);
     let prep = drapekit::sim::prepare(&scene).unwrap();
     let flat = ParticleState {
         positions: (prep.model.positions.iter().zip(&prep.model.masses))
@@ -214,3 +225,17 @@ pub fn pinched() -> (
     let step = drapekit::sim::substep_params(&prep, 8)[0];
     (prep, state, step)
 }
+
+/// The shipped scene `rel` with the lines `fabric` added at the top of its `[fabric]` table
+/// (e.g. `model = "membrane"`), parsed as from its own file so that its relative paths resolve.
+pub fn scene_with_fabric(rel: &str, fabric: &str) -> drapekit::scene::Scene {
+    let path = fixture(rel);
+    let src = std::fs::read_to_string(&path).unwrap();
+    assert!(src.contains("\n[fabric]\n"), "{rel} has no [fabric] table");
+    let src = src.replacen("\n[fabric]\n", &format!("\n[fabric]\n{fabric}\n"), 1);
+    drapekit::scene::Scene::parse(&src, &path).unwrap()
+}
+
+/// The fabric as a membrane (its warp, weft and shear from the scene's preset) whose warp runs
+/// at 30° to each panel's x axis: `scene_with_fabric`'s lines for a scene with a preset.
+pub const MEMBRANE_GRAIN_30: &str = "model = \"membrane\"\ngrain_deg = 30.0";

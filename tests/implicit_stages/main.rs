@@ -2,7 +2,8 @@
 //! same inputs as its CPU twin, on two cases: the T-shirt as placed (springs, hinges, seams,
 //! three coarse levels; the level operations run in `coarse_cycle`'s single workgroup, as on
 //! software adapters) and the pinched cloth (two bodies, contact and friction; every level
-//! operation dispatched on its own, as on hardware GPUs).
+//! operation dispatched on its own, as on hardware GPUs); then both again with the fabric an
+//! orthotropic membrane (its warp at 30°), whose springs carry nothing.
 //!
 //! The bounds: both backends evaluate the same f32 expressions in the same order, so they differ
 //! only where an operation rounds differently (FMA contraction, the adapter's sqrt, divide and
@@ -35,7 +36,11 @@ const EPS: f32 = f32::EPSILON / 2.0;
 /// The T-shirt as placed, with the body and gravity, its particles moved by up to 5 mm and
 /// moving at up to 0.5 m/s: every element far from rest.
 fn tshirt() -> (Prepared, ParticleState, SubstepParams) {
-    let mut scene = Scene::load(&fixture("scenes/tshirt_drape_cotton.toml")).unwrap();
+    tshirt_with(Scene::load(&fixture("scenes/tshirt_drape_cotton.toml")).unwrap())
+}
+
+/// `tshirt` from `scene` (the shipped T-shirt, or a variant of its fabric).
+fn tshirt_with(mut scene: Scene) -> (Prepared, ParticleState, SubstepParams) {
     scene.gravity_start = 0.0;
     let mut prep = prepare(&scene).unwrap();
     prep.params.gravity = [0.0, -9.81, 0.0, 0.0];
@@ -63,6 +68,34 @@ fn parity_solve_stages_pinched() {
     let apart = SolveOptions { small_rows: 0 };
     let g = GpuSolver::with_options(ctx, &prep.model, prep.params, &prep.plan, 1, apart);
     check_stages("pinched", g.unwrap(), Case::new(prep, state, step));
+}
+
+/// The T-shirt as a cotton membrane with its warp at 30° on every panel: the membrane's terms
+/// in every stage, its blocks in the assembled matrix, and an empty spring list.
+#[test]
+fn parity_solve_stages_membrane_tshirt() {
+    let Some(ctx) = gpu() else { return };
+    let scene =
+        common::scene_with_fabric("scenes/tshirt_drape_cotton.toml", common::MEMBRANE_GRAIN_30);
+    let (prep, state, step) = tshirt_with(scene);
+    assert!(!prep.model.membranes.is_empty() && !prep.model.seams.is_empty());
+    let single = SolveOptions {
+        small_rows: u32::MAX,
+    };
+    let g = GpuSolver::with_options(ctx, &prep.model, prep.params, &prep.plan, 1, single);
+    check_stages("membrane tshirt", g.unwrap(), Case::new(prep, state, step));
+}
+
+/// The pinched cloth as a cotton membrane (warp at 30°): the membrane's constant stiffness in
+/// the contact stiffness, with contact and friction.
+#[test]
+fn parity_solve_stages_membrane_pinched() {
+    let Some(ctx) = gpu() else { return };
+    let (prep, state, step) = common::pinched_with(common::MEMBRANE_GRAIN_30);
+    assert!(!prep.model.membranes.is_empty() && prep.params.num_bodies == 2);
+    let apart = SolveOptions { small_rows: 0 };
+    let g = GpuSolver::with_options(ctx, &prep.model, prep.params, &prep.plan, 1, apart);
+    check_stages("membrane pinched", g.unwrap(), Case::new(prep, state, step));
 }
 
 /// The CPU side of a substep's solve: the state at the start of the step and the solve's
@@ -463,7 +496,8 @@ fn check_line_search(g: &mut GpuSolver, c: &mut Case, correction: &mut [Vec4]) {
 
 /// The scale of the terms the line energy sums: per vertex, the magnitude of the change of its
 /// own terms (inertia, air, contact, friction) and of each kind of element it owns, each from
-/// the CPU twin with only those elements; and each hinge's energy w₀·ψ, whose difference at two
+/// the CPU twin with only those elements (a membrane's change is already a difference of nearby
+/// quantities, as a spring's); and each hinge's energy w₀·ψ, whose difference at two
 /// angles cancels (|ψ| ≤ 2 + π·|sin(θ₀/2)|, evaluated four times). A term rounds a few times
 /// relative to its own size, and ~10⁴ of them are added: 32ε of the total magnitude.
 fn line_energy_bound(c: &Case, correction: &[Vec4]) -> f32 {
@@ -494,6 +528,12 @@ fn line_energy_bound(c: &Case, correction: &[Vec4]) -> f32 {
         seams: all.seams,
         membranes: None,
     };
+    let membranes = VbdElements {
+        springs: (&zeros, &[]),
+        hinges: None,
+        seams: None,
+        membranes: all.membranes,
+    };
     let change = |el: &VbdElements, i: usize| {
         c.with_elements(Some(el), |s| {
             Vec3::from(s.energy_change(i, &c.x, correction, cpu::LINE_ALPHAS))
@@ -503,7 +543,7 @@ fn line_energy_bound(c: &Case, correction: &[Vec4]) -> f32 {
     for i in 0..n {
         let own = change(&none, i);
         magnitude += own.abs().max_element();
-        for el in [&springs, &hinges, &seams] {
+        for el in [&springs, &hinges, &seams, &membranes] {
             magnitude += (change(el, i) - own).abs().max_element();
         }
     }

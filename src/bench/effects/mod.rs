@@ -1,6 +1,7 @@
 //! `drapekit bench effects SCENE --out DIR`: the cost per substep of the scene's plan with each
-//! optional effect (bending, wind, seams, body collision, self-collision, strain limit) added and
-//! removed, on the CPU twin and the GPU path, and the check that an absent effect costs nothing:
+//! optional effect (bending, wind, seams, body collision, self-collision, strain limit, and the
+//! orthotropic membrane in place of edge springs) added and removed, on the CPU twin and the GPU
+//! path, and the check that an absent effect costs nothing:
 //! the plan without an effect should cost what the plan with it costs minus its own passes run
 //! by themselves. Writes `effects.csv` and `effects.md`.
 
@@ -15,7 +16,7 @@ use crate::error::Error;
 use crate::gpu::{AdapterChoice, GpuContext, GpuSolver};
 use crate::model::layout::SubstepParams;
 use crate::plan::{Pass, PassPlan};
-use crate::scene::{BodySettings, BodySource, Scene, SelfCollision, Wind};
+use crate::scene::{BodySettings, BodySource, Orthotropic, Scene, SelfCollision, Wind};
 use crate::sim::{prepare, substep_params, Prepared};
 use crate::solver::Solver;
 use glam::Vec3;
@@ -50,17 +51,20 @@ pub enum Effect {
     SelfCollision,
     /// Edge strain limiting.
     StrainLimit,
+    /// The orthotropic membrane in place of the edge springs (without it: springs).
+    Membrane,
 }
 
 impl Effect {
     /// Every effect, in table order.
-    pub const ALL: [Effect; 6] = [
+    pub const ALL: [Effect; 7] = [
         Effect::Bending,
         Effect::Wind,
         Effect::Seams,
         Effect::Body,
         Effect::SelfCollision,
         Effect::StrainLimit,
+        Effect::Membrane,
     ];
 
     /// The name in the tables.
@@ -72,6 +76,7 @@ impl Effect {
             Effect::Body => "body collision",
             Effect::SelfCollision => "self-collision",
             Effect::StrainLimit => "strain limit",
+            Effect::Membrane => "membrane",
         }
     }
 }
@@ -206,8 +211,31 @@ fn variant(
         // The scene format's default limit, 10% over rest length.
         (Effect::StrainLimit, true) => s.solver.strain_limit = s.solver.strain_limit.or(Some(0.1)),
         (Effect::StrainLimit, false) => s.solver.strain_limit = None,
+        (Effect::Membrane, true) => {
+            s.fabric.membrane = Some(membrane_of(&s.fabric));
+            // The springs' step for both plans: both time the same substep.
+            s.solver.substeps = Some(base.substeps);
+        }
+        (Effect::Membrane, false) => s.fabric.membrane = None,
     }
     Ok(Some(prepare(&s)?))
+}
+
+/// The scene's membrane, else its preset's warp, weft and shear, else an isotropic membrane of
+/// the springs' stiffness (shear a tenth of it, as wovens shear far more easily than they
+/// stretch). The cost per substep does not depend on the values.
+fn membrane_of(fabric: &crate::scene::Fabric) -> Orthotropic {
+    let k = fabric.stretch_stiffness;
+    let from_preset = (fabric.preset.and_then(crate::scene::preset)).map(|p| Orthotropic {
+        warp: p.warp_stiffness_n_m as f32,
+        weft: p.weft_stiffness_n_m as f32,
+        shear: p.shear_stiffness_n_m as f32,
+    });
+    (fabric.membrane.or(from_preset)).unwrap_or(Orthotropic {
+        warp: k,
+        weft: k,
+        shear: 0.1 * k,
+    })
 }
 
 /// A sphere just below the cloth, 0.3 of its width across, for scenes without a body.
@@ -338,6 +366,7 @@ pub fn run_cli(opts: &EffectsOptions) -> Result<Vec<EffectRow>, Error> {
             Effect::Body => !scene.bodies.is_empty(),
             Effect::SelfCollision => scene.self_collision.is_some(),
             Effect::StrainLimit => scene.solver.strain_limit.is_some(),
+            Effect::Membrane => scene.fabric.membrane.is_some(),
         };
         let with = variant(&scene, &base, effect, true)?;
         let without = variant(&scene, &base, effect, false)?.expect("an effect can be removed");
@@ -442,8 +471,15 @@ fn measure(
     }
     // The plan without the effect steps its own scene; the others step the scene with it.
     let mut solvers = vec![(w, &with_steps[..]), (wo, &without_steps[..])];
+    let mut notes = Vec::new();
+    if effect == Effect::Membrane {
+        notes.push("against edge springs: \"without\" runs the springs the membrane replaces");
+        if !own.is_empty() {
+            notes.push("the residue is the springs' own cost");
+        }
+    }
     if own.is_empty() {
-        row.note = "no pass of its own: it is evaluated inside vbd_solve".into();
+        notes.push("no pass of its own: it is evaluated inside vbd_solve");
     } else {
         // The own passes' batch carries the same fixed cost as any batch: the empty plan
         // measures that, to take it off.
@@ -470,6 +506,7 @@ fn measure(
         solvers.push((alone, &with_steps[..]));
         solvers.push((empty, &with_steps[..]));
     }
+    row.note = notes.join("; ");
     let timed = time_in_turns(&mut solvers, repeats)?;
     let spread = timed.iter().map(|t| t.1).fold(0.0, f64::max);
     (row.with, row.without) = (1e6 * timed[0].0, 1e6 * timed[1].0);

@@ -54,7 +54,8 @@ pub(super) fn md_text(
 ) -> String {
     let mut md = format!(
         "What each optional effect costs per substep in `{}` ({} particles; the scene's plan: {}). \
-         Each effect is added to or removed from the scene (seams: from the model) and both \
+         Each effect is added to or removed from the scene (seams: from the model; the membrane \
+         replaces the edge springs, so \"without\" is the springs) and both \
          plans are timed from the scene's first frame; \"own passes\" runs only the passes the \
          effect adds, less what a plan with no pass costs (the fixed cost of a batch). Residue = without − (with − own passes): what is left of an effect once \
          it is removed, zero when removing it takes exactly its passes away. Times are µs per \

@@ -70,6 +70,7 @@ pub fn pack(model: &ClothModel) -> Packed {
         words[1] = append(&mut words, b.springs.iter().copied());
         words[2] = append(&mut words, b.hinges.iter().flatten().copied());
         words[3] = append(&mut words, b.seams.iter().flatten().copied());
+        words[4] = append(&mut words, b.membranes.iter().flatten().copied());
     }
     let (mut rows, mut blocks) = (0u32, 0u32);
     let mut columns = Vec::new();

@@ -121,6 +121,12 @@ pub enum Res {
     BlockTexels = 31,
     /// Every level's block columns (a texture).
     BlockColumns = 32,
+    /// Membrane CSR offsets (texture).
+    MembraneOffsets = 33,
+    /// Membrane refs (texture).
+    MembraneRefs = 34,
+    /// Membrane triangles (texture).
+    Membranes = 35,
 }
 
 impl Res {
@@ -148,6 +154,9 @@ impl Res {
                 | Res::Sdf
                 | Res::BlockTexels
                 | Res::BlockColumns
+                | Res::MembraneOffsets
+                | Res::MembraneRefs
+                | Res::Membranes
         )
     }
 }
@@ -323,11 +332,12 @@ impl SolveKernel {
         self == SolveKernel::ReduceResidual
     }
 
-    /// The complete WGSL module, with the bending and seam sections of `energies`.
+    /// The complete WGSL module, with the bending, seam and membrane sections of `energies`.
     pub fn compose(self, energies: VbdEnergies) -> Composed {
         let enabled = |name: &str| match name {
             "bending" => energies.bending,
             "seams" => energies.seams,
+            "membrane" => energies.membrane,
             "assemble" => self == SolveKernel::Assemble,
             "writes_control" => self.writes_control(),
             _ => true,
@@ -369,6 +379,13 @@ impl SolveKernel {
                     }
                     if energies.seams {
                         list.extend([(SeamOffsets, false), (SeamRefs, false), (Seams, false)]);
+                    }
+                    if energies.membrane {
+                        list.extend([
+                            (MembraneOffsets, false),
+                            (MembraneRefs, false),
+                            (Membranes, false),
+                        ]);
                     }
                 }
                 Include::BlockTexels => list.extend([(BlockTexels, false), (BlockColumns, false)]),

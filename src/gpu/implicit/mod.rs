@@ -131,6 +131,7 @@ impl ImplicitSolve {
             bending: !model.hinges.is_empty(),
             seams: !model.seams.is_empty(),
             body: false,
+            membrane: !model.membranes.is_empty(),
         };
         check_storage_limit(ctx, &kernels, energies)?;
 

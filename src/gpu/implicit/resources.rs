@@ -151,9 +151,17 @@ impl SolveTextures {
         )?;
         let columns = bytemuck::cast_slice(&packed.columns[..blocks]);
         let block_columns = TexelArray::with_data(ctx, "block_columns", R32Uint, columns, none)?;
-        let mut kinds = vec![Elements::Springs];
+        // A membrane's springs carry no force: the solve gathers an empty spring list, as the
+        // CPU's `Elements::new` does.
+        let membrane = !model.membranes.is_empty();
+        let springs = match membrane {
+            true => Elements::NoSprings,
+            false => Elements::Springs,
+        };
+        let mut kinds = vec![springs];
         kinds.extend((!model.hinges.is_empty()).then_some(Elements::Hinges));
         kinds.extend((!model.seams.is_empty()).then_some(Elements::Seams));
+        kinds.extend(membrane.then_some(Elements::Membranes));
         kinds.extend(contact.then_some(Elements::Sdf));
         let mut elements = Vec::new();
         for kind in kinds {
@@ -210,6 +218,9 @@ impl<'a> Resources<'a> {
             Res::SeamOffsets => element("seam_offsets"),
             Res::SeamRefs => element("seam_refs"),
             Res::Seams => element("seams"),
+            Res::MembraneOffsets => element("membrane_offsets"),
+            Res::MembraneRefs => element("membrane_refs"),
+            Res::Membranes => element("membranes"),
             Res::Sdf => element("sdf"),
             Res::BlockTexels if writable => Binding::Write(&t.block_texels),
             Res::BlockTexels => Binding::Read(&t.block_texels),
