@@ -378,28 +378,6 @@ impl ClothModel {
                 c_sum[e as usize] += s.damping;
             }
         }
-        // A membrane triangle's stiffness matrix is Σ_c k_c·A·g_c·g_cᵀ over its conditions (and
-        // τ times it in damping), with g the per-vertex coefficients: Gershgorin's row sum of
-        // vertex r is k·|g_r|·Σ_s|g_s| (the shear's g_r = α_r·w_v + β_r·w_u at most
-        // |α_r| + |β_r| for unit images). Half goes into the sums, which count 2Σk.
-        for m in &self.membranes {
-            let [a1, a2, b1, b2] = m.shape;
-            let (a, b) = ([-a1 - a2, a1, a2], [-b1 - b2, b1, b2]);
-            let [ku, kv, ks, tau] = m.stiffness;
-            let (sa, sb): (f32, f32) = (
-                a.iter().map(|x| x.abs()).sum(),
-                b.iter().map(|x| x.abs()).sum(),
-            );
-            for r in 0..3 {
-                let row = ku * a[r].abs() * sa
-                    + kv * b[r].abs() * sb
-                    + ks * (a[r].abs() + b[r].abs()) * (sa + sb);
-                let v = m.v[r] as usize;
-                k_sum[v] += 0.5 * row;
-                parts[v][0] += 0.5 * row;
-                c_sum[v] += 0.5 * tau * row;
-            }
-        }
         // A seam pair is a zero-length spring between the vertex and the weighted partner
         // point: its stiffness matrix k·g·gᵀ with g = (1, −(1−w), −w) has row sums 2k·g_i.
         for s in &self.seams {
