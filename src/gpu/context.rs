@@ -90,10 +90,19 @@ impl LimitsReport {
     }
 }
 
+/// A wgpu instance on the primary backends (Vulkan, Metal, DirectX 12), or those
+/// `WGPU_BACKEND` names. The OpenGL backend is left out unless asked for: its compute support
+/// is too thin for the kernels' storage textures, and Mesa's EGL teardown at process exit
+/// crashed a run that had failed to find its adapter ("double free or corruption").
+fn instance() -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = wgpu::Backends::PRIMARY;
+    wgpu::Instance::new(desc.with_env())
+}
+
 /// The adapters on this machine and `auto`'s choice among them.
 pub fn adapters() -> AdapterList {
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let instance = instance();
     let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()))
         .iter()
         .map(|a| report(&a.get_info()))
@@ -143,8 +152,7 @@ pub struct GpuContext {
 impl GpuContext {
     /// Opens a device on the chosen adapter.
     pub fn new(choice: &AdapterChoice) -> Result<Self, Error> {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let instance = instance();
         let choice = match (choice, std::env::var("WGPU_ADAPTER_NAME")) {
             (AdapterChoice::Auto, Ok(name)) if !name.is_empty() => AdapterChoice::Named(name),
             (c, _) => c.clone(),
