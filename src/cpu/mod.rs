@@ -44,7 +44,9 @@ pub use collide_body::{
     collide_body, collide_deformed, collide_edge, collide_edges, collide_particle, to_body_frame,
 };
 pub use contact_planes::contact_planes;
-pub use deformed_body::{closest_barycentric, deformed_sample, DeformedSample};
+pub use deformed_body::{
+    closest_barycentric, deformed_sample, DeformedSample, REFINEMENTS, SETTLED_STEP,
+};
 pub use force_residual::{force_residual, reduce_residual, residual_gravity};
 pub use hash_clear::hash_clear;
 pub use hash_count::{hash_bucket, hash_cell_of, hash_count};
