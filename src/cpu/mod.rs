@@ -54,7 +54,9 @@ pub use hash_fill::hash_fill;
 pub use hash_scan::hash_scan;
 pub use hinge_forces::{hinge_force, hinge_forces, hinge_frame, HingeFrame};
 pub use implicit::{Elements, LevelArrays, Newton, Vbd};
-pub use implicit_terms::{hinge_psi, Implicit, VbdElements, VertexSystem, CONTACT_RATIO};
+pub use implicit_terms::{
+    hinge_psi, Implicit, VbdElements, VertexSystem, CONTACT_RATIO, PLANE_BLOCKS,
+};
 pub use integrate::{integrate, HingeGather};
 pub use line_energy::{apply_correction, line_energy, line_search, tree_sum, LINE_ALPHAS};
 pub use monitor::monitor;
