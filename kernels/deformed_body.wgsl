@@ -189,6 +189,7 @@ fn deformed_sample(sdf: texture_2d<f32>, body: BodyParams, x: vec3<f32>) -> Defo
             continue;
         }
         var settled = false;
+        var last = vec3<f32>(0.0);
         for (var r = 0u; r < DEFORMED_REFINEMENTS; r = r + 1u) {
             let blend = blend_at(sdf, body, l, y, x);
             if (!blend.valid) {
@@ -198,11 +199,15 @@ fn deformed_sample(sdf: texture_2d<f32>, body: BodyParams, x: vec3<f32>) -> Defo
             if (!inv.ok) {
                 break;
             }
-            let next = inv.m * (x - blend.b);
-            let moved = distance(next, y);
-            y = next;
+            var step = inv.m * (x - blend.b) - y;
+            // A step that turns back on the last one is overshooting an oscillation: halve it.
+            if (dot(step, last) < 0.0) {
+                step = step * 0.5;
+            }
+            y = y + step;
+            last = step;
             settled = true;
-            if (moved < DEFORMED_SETTLED_STEP) {
+            if (length(step) < DEFORMED_SETTLED_STEP) {
                 break;
             }
         }
