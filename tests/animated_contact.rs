@@ -310,4 +310,11 @@ fn tshirt_walk_short_stays_outside_the_deformed_body() {
         stats.body_contacts > prep.model.len() / 20,
         "the shirt fell off"
     );
+    // The last frame's show-through check measures the body as it stands then (arms lowered),
+    // as the per-frame depths do: against the rest pose (arms out) the sleeves would lie
+    // centimetres inside the raised arms.
+    let last = (frames.len() - 1) as u32;
+    let shown = drapekit::health::result::show_through(&prep, frames.last().unwrap(), last);
+    let shown = shown.expect("the scene has a body");
+    assert_eq!(shown.particles, 0, "{shown:?}");
 }
