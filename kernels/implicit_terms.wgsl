@@ -13,7 +13,8 @@
 @group(0) @binding(5) var<storage, read_write> disp: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read> inertial: array<vec4<f32>>;
 // Each body's contact plane at each vertex, body after body (num_bodies × N): normal (xyz) and
-// c (w), φ ≈ c + n̂·D; written by contact_planes.
+// c (w), φ ≈ c + n̂·D; then each body's surface velocity at each vertex (xyz, m/s), as many
+// again; written by contact_planes.
 @group(0) @binding(7) var<storage, read_write> planes: array<vec4<f32>>;
 // Each vertex's normal force per body at the start of the step (friction's λ), in N.
 @group(0) @binding(8) var<storage, read_write> lambdas: array<vec4<f32>>;
@@ -53,12 +54,15 @@ fn spring_hessian(k: f32, rest: f32, d: vec3<f32>, len: f32) -> mat3x3<f32> {
     return k * nn + (k * transverse) * (identity() - nn);
 }
 
+// Body b's surface velocity at vertex i's start of step (a deforming body's skin, not its root).
+fn surface_velocity(b: u32, i: u32) -> vec3<f32> {
+    return planes[(params.num_bodies + b) * params.num_particles + i].xyz;
+}
+
 // Body b's slip of vertex i over the step relative to the body surface, in the plane with
 // normal n: the displacement less the body's own over the step.
 fn slip(b: u32, i: u32, d: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    let pose = step.bodies[b];
-    let offset = prev(i).xyz - pose.translation.xyz;
-    let u = d - params.dt * (pose.velocity.xyz + cross(pose.angular_velocity.xyz, offset));
+    let u = d - params.dt * surface_velocity(b, i);
     return u - dot(u, n) * n;
 }
 

@@ -251,7 +251,6 @@ fn run_scene_from(
     if let Some(ctx) = &device {
         // Refused from the scene alone, before anything is built or baked.
         crate::model::budget::check_gpu_textures(&scene, ctx.max_texels())?;
-        crate::model::budget::check_gpu_bodies(&scene)?;
         crate::model::budget::check_sdf_textures(&scene, ctx.max_texels())?;
     }
     let prep = prepare(&scene)?;

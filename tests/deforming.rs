@@ -231,43 +231,13 @@ fn an_obj_sequence_cache_reads_back() {
 }
 
 /// A closed box of half size `h` as OBJ text (vertices ±h, outward faces).
-fn box_obj(h: f32) -> (String, Vec<Vec3>) {
-    let corners: Vec<Vec3> = (0..8)
-        .map(|i| {
-            let s = |b: u32| if i & b != 0 { h } else { -h };
-            Vec3::new(s(1), s(2), s(4))
-        })
-        .collect();
-    let faces = [
-        [0, 2, 6, 4],
-        [1, 5, 7, 3],
-        [0, 4, 5, 1],
-        [2, 3, 7, 6],
-        [0, 1, 3, 2],
-        [4, 6, 7, 5],
-    ];
-    let mut s: String = (corners.iter())
-        .map(|v| format!("v {} {} {}\n", v.x, v.y, v.z))
-        .collect();
-    for f in faces {
-        s.push_str(&format!(
-            "f {} {} {} {}\n",
-            f[0] + 1,
-            f[1] + 1,
-            f[2] + 1,
-            f[3] + 1
-        ));
-    }
-    (s, corners)
-}
-
 #[test]
 fn a_cached_body_collides_where_its_moved_surface_is() {
     // A 20 cm box that a two-frame cache turns 30° about y and moves 5 cm along x: with one
     // collision part, inverse skinning maps each point back exactly, and near a face's middle
     // the rest SDF is the face's plane distance, which trilinear sampling reproduces.
     let dir = temp("cached-box");
-    let (text, corners) = box_obj(0.1);
+    let (text, corners) = common::box_obj(0.1);
     std::fs::write(dir.join("box.obj"), text).unwrap();
     let turn = Quat::from_rotation_y(30f32.to_radians());
     let shift = Vec3::new(0.05, 0.0, 0.0);

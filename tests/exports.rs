@@ -562,3 +562,61 @@ fn a_sewn_garment_is_one_welded_mesh_in_the_gltf_from_its_first_sewn_frame() {
         s["warnings"]
     );
 }
+
+#[test]
+fn a_deforming_body_is_exported_as_it_moves() {
+    // The walking skirt, walking from the start: the body node's mesh is its first exported
+    // frame with a morph target per later one, each the body as it stood then.
+    let mut scene = Scene::load(&common::fixture("scenes/skirt_walk.toml")).unwrap();
+    let deform = scene.bodies[0].deform.as_mut().unwrap();
+    (deform.start, deform.transition) = (0.0, 0.0);
+    scene.output.gltf = true;
+    scene.output.every = 2;
+    let out = out_dir("walking-body");
+    run_scene(&scene, &options(&out, 4)).unwrap();
+    let prep = prepare(&scene).unwrap();
+    let collider = &prep.model.colliders[0];
+    let gltf = gltf::Gltf::from_slice(&std::fs::read(out.join("garment.glb")).unwrap()).unwrap();
+    khronos_validator(&out.join("garment.glb"));
+    let blob = gltf.blob.as_deref();
+    let buffers = |_: gltf::Buffer| blob;
+    let body = gltf.nodes().find(|n| n.name() == Some("body")).unwrap();
+    let prim = body.mesh().unwrap().primitives().next().unwrap();
+    let reader = prim.reader(buffers);
+    let base: Vec<Vec3> = reader.read_positions().unwrap().map(Vec3::from).collect();
+    let targets: Vec<Vec<Vec3>> = (reader.read_morph_targets())
+        .map(|(p, _, _)| p.unwrap().map(Vec3::from).collect())
+        .collect();
+    let anim = gltf.animations().next().unwrap();
+    let channel = (anim.channels())
+        .find(|c| {
+            c.target().node().index() == body.index()
+                && c.target().property() == gltf::animation::Property::MorphTargetWeights
+        })
+        .expect("the body's weights channel");
+    let times: Vec<f32> = channel.reader(buffers).read_inputs().unwrap().collect();
+    // The glTF starts at the first frame with the garment sewn (later than frame 0 here).
+    assert!(times.len() >= 2, "times {times:?}");
+    assert_eq!(targets.len(), times.len() - 1);
+    let mut moved = 0.0f32;
+    for (k, &t) in times.iter().enumerate() {
+        let expect = collider.world_positions(t);
+        for (i, p) in expect.iter().enumerate() {
+            let got = base[i]
+                + if k == 0 {
+                    Vec3::ZERO
+                } else {
+                    targets[k - 1][i]
+                };
+            // As for the cloth (check_glb): one rounding of the delta and one of the sum.
+            let tol = 2.0 * f32::EPSILON * base[i].abs().max(p.abs());
+            assert!(
+                (got - *p).abs().cmple(tol).all(),
+                "t {t}: vertex {i} {got} != {p}"
+            );
+            moved = moved.max(p.distance(base[i]));
+        }
+    }
+    eprintln!("body exported at {times:?} s, moving up to {moved:.2e} m from the first");
+    assert!(moved > 0.01, "the body hardly moved ({moved} m)");
+}

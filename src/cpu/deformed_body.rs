@@ -5,7 +5,9 @@
 //! is a candidate. From there the rest point y is refined as the fixed point of y = A⁻¹(x − b),
 //! where A and b blend the parts' rotations and translations with the skin weights at y (those
 //! of y's nearest rest triangle at its closest point): y is then where linear blend skinning
-//! takes the rest surface to x. The rest SDF at y gives φ; A⁻ᵀ∇φ the normal. A candidate whose
+//! takes the rest surface to x. Near a joint the plain iteration can oscillate about the fixed
+//! point and shrink slowly (by 0.85 per step at a shoulder mid-walk, leaving it 4 mm off after
+//! 12 steps); a step that turns back on the last one is halved, which lands near the middle. The rest SDF at y gives φ; A⁻ᵀ∇φ the normal. A candidate whose
 //! y does not skin back to within the thickness of x is dropped (the fixed point did not
 //! settle); of the rest, the smallest φ wins (the point is inside if any part says so).
 
@@ -231,16 +233,22 @@ pub fn deformed_sample(
             continue;
         }
         let mut settled = None;
+        let mut last = Vec3::ZERO;
         for _ in 0..REFINEMENTS {
             let Some(blend) = blend_at(body, parts, &w, &l, y, x) else {
                 break;
             };
             let Some(inv) = inverse(blend.a) else { break };
-            let next = inv * (x - blend.b);
-            let step = next.distance(y);
-            y = next;
+            let mut step = inv * (x - blend.b) - y;
+            // A step that turns back on the last one is overshooting an oscillation (near a
+            // joint the weights change fast along the step): half of it lands near the middle.
+            if step.dot(last) < 0.0 {
+                step *= 0.5;
+            }
+            y += step;
+            last = step;
             settled = Some(());
-            if step < SETTLED_STEP {
+            if step.length() < SETTLED_STEP {
                 break;
             }
         }

@@ -6,7 +6,7 @@ use super::assemble::assemble;
 use super::coarse_operator::coarse_operator;
 use super::contact_planes::contact_planes;
 use super::force_residual::{force_residual, reduce_residual};
-use super::implicit_terms::{Implicit, VbdElements};
+use super::implicit_terms::{Implicit, VbdElements, PLANE_BLOCKS};
 use super::line_energy::{apply_correction, line_energy, line_search};
 use super::pcg::{pcg_direction, pcg_matvec, pcg_start, pcg_step, PcgScalars};
 use super::prolong::{correction_filter, prolong};
@@ -193,7 +193,7 @@ impl Vbd {
             x: vec![Vec4::ZERO; n],
             y: vec![Vec4::ZERO; n],
             steps: vec![0.0; sweeps.max(1)],
-            planes: vec![Vec4::ZERO; n * (params.num_bodies as usize).max(1)],
+            planes: vec![Vec4::ZERO; PLANE_BLOCKS * n * (params.num_bodies as usize).max(1)],
             lambdas: vec![Vec4::ZERO; n],
             newton,
             residual_partials: vec![Vec4::ZERO; groups],

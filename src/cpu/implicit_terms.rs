@@ -30,7 +30,6 @@
 //!   f₀(s) = s²/(2ε) below ε = ε_v·h, s − ε/2 above: Coulomb friction, static (proportional to
 //!   the slip) below the slip speed ε_v.
 
-use super::collide_body::{body_velocity_at, to_body_frame};
 use super::hinge_forces::HingeFrame;
 use super::membrane::MembraneStep;
 use super::seam_forces::rest_gap;
@@ -48,6 +47,10 @@ pub const CONTACT_RATIO: f32 = 100.0;
 /// at the start of a step (`contact_planes`), and their normal is left out of the Newton
 /// step's linear system and of the force residual.
 pub const CONTACT_SLACK_FRACTION: f32 = 0.01;
+
+/// Blocks of `num_bodies × n` entries in `Implicit::planes`: every body's plane at every
+/// vertex, then every body's surface velocity there (`Implicit::surface_velocity`).
+pub const PLANE_BLOCKS: usize = 2;
 
 /// The elements a vertex gathers over, as CSR lists (the same arrays the force stages use).
 pub struct VbdElements<'a> {
@@ -76,7 +79,8 @@ pub struct Implicit<'a> {
     /// The elements.
     pub el: &'a VbdElements<'a>,
     /// Each body's contact plane at each vertex, body after body (`num_bodies × n`): normal
-    /// (xyz) and c (w), φ ≈ c + n̂·D.
+    /// (xyz) and c (w), φ ≈ c + n̂·D; then each body's surface velocity at each vertex (xyz,
+    /// m/s), as many again (`PLANE_BLOCKS`).
     pub planes: &'a [Vec4],
     /// Each vertex's normal force per body at the start of the step (friction's λ), in N.
     pub lambdas: &'a [Vec4],
@@ -126,6 +130,14 @@ impl Implicit<'_> {
     /// Vertex `i`'s plane for body `b`.
     pub fn plane(&self, b: usize, i: usize) -> Vec4 {
         self.planes[b * self.n() + i]
+    }
+
+    // Deforming bodies: friction against the skin's velocity.
+    /// The velocity of body `b`'s surface at vertex `i`'s start of step, m/s (xyz), stored by
+    /// `contact_planes` after the planes (`PLANE_BLOCKS`): a deforming body's skin
+    /// moves unlike its root, so the velocity comes from the same query as the plane.
+    pub fn surface_velocity(&self, b: usize, i: usize) -> Vec3 {
+        v3(self.planes[(self.params.num_bodies as usize + b) * self.n() + i])
     }
 
     /// A seam pair's gap (partner point minus seam vertex) and opening (its change over the
@@ -195,9 +207,7 @@ impl Implicit<'_> {
     /// Body `b`'s slip of vertex `i` over the step relative to the body surface, in the plane
     /// with normal `n`: the displacement less the body's own over the step.
     fn slip(&self, b: usize, i: usize, d: Vec3, n: Vec3) -> Vec3 {
-        let pose = &self.step.bodies[b];
-        let (_, offset) = to_body_frame(pose, v3(self.prev[i]));
-        let u = d - self.params.dt * body_velocity_at(pose, offset);
+        let u = d - self.params.dt * self.surface_velocity(b, i);
         u - u.dot(n) * n
     }
 

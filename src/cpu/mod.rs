@@ -45,7 +45,9 @@ pub use collide_body::{
     collide_body, collide_deformed, collide_edge, collide_edges, collide_particle, to_body_frame,
 };
 pub use contact_planes::contact_planes;
-pub use deformed_body::{closest_barycentric, deformed_sample, DeformedSample};
+pub use deformed_body::{
+    closest_barycentric, deformed_sample, DeformedSample, REFINEMENTS, SETTLED_STEP,
+};
 pub use force_residual::{force_residual, reduce_residual, residual_gravity};
 pub use hash_clear::hash_clear;
 pub use hash_count::{hash_bucket, hash_cell_of, hash_count};
@@ -53,7 +55,9 @@ pub use hash_fill::hash_fill;
 pub use hash_scan::hash_scan;
 pub use hinge_forces::{hinge_force, hinge_forces, hinge_frame, HingeFrame};
 pub use implicit::{Elements, LevelArrays, Newton, Vbd};
-pub use implicit_terms::{hinge_psi, Implicit, VbdElements, VertexSystem, CONTACT_RATIO};
+pub use implicit_terms::{
+    hinge_psi, Implicit, VbdElements, VertexSystem, CONTACT_RATIO, PLANE_BLOCKS,
+};
 pub use integrate::{integrate, HingeGather};
 pub use line_energy::{apply_correction, line_energy, line_search, tree_sum, LINE_ALPHAS};
 pub use monitor::monitor;

@@ -62,6 +62,10 @@ pub struct BodyTrack<'a> {
     pub triangles: &'a [[u32; 3]],
     /// Rotation and translation, body to world.
     pub poses: Vec<(Quat, Vec3)>,
+    /// A deforming body's world positions at each of the times (empty for a rigid body): its
+    /// mesh then takes the first as its base and one morph target per later time, like the
+    /// cloth's.
+    pub frames: Vec<Vec<Vec3>>,
 }
 
 /// The `.glb` bytes of the cloth (if any) and the bodies over `times`, or `None` without
@@ -95,6 +99,12 @@ pub fn glb_bytes(
     }
     for body in bodies {
         let (rotation, translation) = *body.poses.first()?;
+        if !body.frames.is_empty()
+            && (body.frames.len() != times.len()
+                || body.frames.iter().any(|f| f.len() != body.positions.len()))
+        {
+            return None;
+        }
         let mesh = b.body_mesh(body);
         let node = b.doc.root.push(json::Node {
             mesh: Some(mesh),
@@ -104,6 +114,9 @@ pub fn glb_bytes(
             ..node()
         });
         nodes.push(node);
+        if body.frames.len() > 1 {
+            b.weights_channel(times, body.frames.len(), node, &mut channels, &mut samplers);
+        }
         if body.poses.len() > 1 {
             if body.poses.len() != times.len() {
                 return None;
@@ -153,8 +166,21 @@ impl Builder {
         channels: &mut Vec<animation::Channel>,
         samplers: &mut Vec<animation::Sampler>,
     ) {
+        self.weights_channel(cloth.times, cloth.frames.len(), node, channels, samplers);
+    }
+
+    /// The weights animation of a mesh whose `frames` frames (at `times`) are its base and one
+    /// morph target per later frame.
+    fn weights_channel(
+        &mut self,
+        times: &[f32],
+        frames: usize,
+        node: Index<json::Node>,
+        channels: &mut Vec<animation::Channel>,
+        samplers: &mut Vec<animation::Sampler>,
+    ) {
         let b = self;
-        let later = cloth.frames.len() - 1;
+        let later = frames - 1;
         if later == 0 {
             return;
         }
@@ -162,11 +188,11 @@ impl Builder {
         // interpolation between neighbours blends two frames' positions linearly. Dense weights
         // take 4·frames² bytes, less than the targets' 24·particles·frames until frames pass
         // six times the particle count.
-        let mut weights = vec![0.0f32; cloth.frames.len() * later];
-        for k in 1..cloth.frames.len() {
+        let mut weights = vec![0.0f32; frames * later];
+        for k in 1..frames {
             weights[k * later + k - 1] = 1.0;
         }
-        let input = b.scalars(cloth.times, true);
+        let input = b.scalars(times, true);
         let output = b.scalars(&weights, false);
         channels.push(b.channel(samplers, input, output, node, Weights));
     }
@@ -285,21 +311,38 @@ impl Builder {
         })
     }
 
-    /// The body mesh in its own frame.
+    /// The body mesh in its own frame (a deforming body's: its first frame, and a morph target
+    /// per later frame).
     fn body_mesh(&mut self, body: &BodyTrack) -> Index<json::Mesh> {
         let mut attributes = BTreeMap::new();
         let target = Some(buffer::Target::ArrayBuffer);
-        let positions = self.vec3s(body.positions, true, target);
-        let normals = unit_normals(body.positions, body.triangles);
-        let normals = self.vec3s(&normals, false, target);
+        let base = body.frames.first().map_or(body.positions, |f| &f[..]);
+        let positions = self.vec3s(base, true, target);
+        let base_normals = unit_normals(base, body.triangles);
+        let normals = self.vec3s(&base_normals, false, target);
         attributes.insert(Valid(mesh::Semantic::Positions), positions);
         attributes.insert(Valid(mesh::Semantic::Normals), normals);
+        let targets: Vec<mesh::MorphTarget> = (body.frames.iter().skip(1))
+            .map(|frame| {
+                let dp: Vec<Vec3> = frame.iter().zip(base).map(|(p, q)| *p - *q).collect();
+                let dn: Vec<Vec3> = (unit_normals(frame, body.triangles).iter())
+                    .zip(&base_normals)
+                    .map(|(n, m)| *n - *m)
+                    .collect();
+                mesh::MorphTarget {
+                    positions: Some(self.vec3s(&dp, true, target)),
+                    normals: Some(self.vec3s(&dn, false, target)),
+                    tangents: None,
+                }
+            })
+            .collect();
+        let count = targets.len();
         let material = self.material("body", BODY.extend(1.0), false, None);
         let indices = self.indices(body.triangles);
         self.doc.root.push(json::Mesh {
             name: Some(body.name.clone()),
-            primitives: vec![primitive(attributes, indices, material, Vec::new())],
-            weights: None,
+            primitives: vec![primitive(attributes, indices, material, targets)],
+            weights: (count > 0).then(|| vec![0.0; count]),
             extensions: None,
             extras: Default::default(),
         })

@@ -15,7 +15,7 @@ use crate::error::Error;
 use crate::pattern::garment::Garment;
 use crate::scene::{OutputSettings, Scene, TextureSetting};
 use crate::sim::Prepared;
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Quat, Vec2, Vec3, Vec4};
 use obj::Group;
 use std::path::{Path, PathBuf};
 
@@ -264,14 +264,21 @@ impl<'a> Exporter<'a> {
         glb::glb_bytes(Some(&cloth), &bodies, times).ok_or_else(|| self.too_large(GLB_FILE))
     }
 
-    /// Every body's mesh and its poses at `times` (one pose when it never moves).
+    /// Every body's mesh and its poses at `times` (one pose when it never moves); a deforming
+    /// body's world positions at `times` instead, at the identity pose.
     fn body_tracks(&self, times: &[f32]) -> Vec<glb::BodyTrack<'a>> {
         (self.bodies.iter().enumerate())
             .map(|(i, c)| glb::BodyTrack {
                 name: self.body_name(i),
                 positions: &c.body.mesh.positions,
                 triangles: &c.body.mesh.triangles,
-                poses: if c.motion.moves() {
+                frames: match c.deformed {
+                    Some(_) => times.iter().map(|&t| c.world_positions(t)).collect(),
+                    None => Vec::new(),
+                },
+                poses: if c.deformed.is_some() {
+                    vec![(Quat::IDENTITY, Vec3::ZERO)]
+                } else if c.motion.moves() {
                     let pose = |t: f32| c.motion.at(t);
                     times
                         .iter()

@@ -6,6 +6,9 @@ use crate::plan::Pass;
 /// The shared structs and helpers.
 pub const COMMON_WGSL: &str = include_str!("../../kernels/common.wgsl");
 
+/// A deforming body's contact by inverse skinning, composed after the stages that collide.
+pub const DEFORMED_BODY_WGSL: &str = include_str!("../../kernels/deformed_body.wgsl");
+
 /// Where a force stage finds the forces that earlier stages of the substep summed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ForceInput {
@@ -98,7 +101,11 @@ pub fn compose_with(pass: Pass, input: ForceInput, energies: VbdEnergies) -> Str
         _ => true,
     };
     let body = keep_sections(pass.kernel_source(), enabled);
-    format!("{COMMON_WGSL}\n{body}\n{tail}")
+    let deformed = match pass {
+        Pass::CollideBody => DEFORMED_BODY_WGSL,
+        _ => "",
+    };
+    format!("{COMMON_WGSL}\n{body}\n{tail}{deformed}")
 }
 
 /// `source` with its optional sections resolved: a `// section NAME` … `// else NAME` …

@@ -133,13 +133,6 @@ impl GpuSolver {
                 model.colliders.len()
             )));
         }
-        // The kernels have no inverse skinning yet: a deforming body would collide as its
-        // rest pose (scenes are refused earlier, by `budget::check_gpu_bodies`).
-        if model.colliders.iter().any(|c| c.deformed.is_some()) {
-            return Err(Error::Gpu(
-                "a deforming body collides on the CPU path only (--backend cpu)".into(),
-            ));
-        }
         let state_usage = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC;
         let mut labels = vec!["params", "positions", "velocities", "forces", "staging"];
         let params_buf = ctx

@@ -1,7 +1,7 @@
 //! What a finished run says about its result: seams left open, a body showing through the
 //! cloth, cloth that never came to rest. Each is a warning in the summary and on the terminal.
 
-use crate::metrics::{body_distances, ShowThrough};
+use crate::metrics::{body_distances, deformed_distances, ShowThrough};
 use crate::sim::{Prepared, RunStats};
 use glam::Vec4;
 
@@ -43,13 +43,20 @@ pub fn show_through(prep: &Prepared, positions: &[Vec4], frame: u32) -> Option<S
         .collect();
     let mut particle_depth = vec![0.0f32; positions.len()];
     let mut centre_depth = vec![0.0f32; centres.len()];
+    let t = frame as f32 * prep.frame_dt;
     for (b, c) in prep.model.colliders.iter().enumerate() {
-        let pose = prep.body_state(b, frame as f32 * prep.frame_dt);
+        let pose = prep.body_state(b, t);
         for (depth, points) in [
             (&mut particle_depth, positions),
             (&mut centre_depth, &centres[..]),
         ] {
-            for (d, phi) in depth.iter_mut().zip(body_distances(c, &pose, points)) {
+            // A deforming body is measured as it stands at the frame, not in its rest pose; a
+            // deformed mesh that cannot be built (degenerate) is left out of this check.
+            let distances = match &c.deformed {
+                Some(_) => deformed_distances(c, t, points).unwrap_or_default(),
+                None => body_distances(c, &pose, points),
+            };
+            for (d, phi) in depth.iter_mut().zip(distances) {
                 *d = d.max(-phi);
             }
         }

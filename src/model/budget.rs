@@ -249,30 +249,6 @@ pub fn check_gpu_textures(scene: &Scene, max_texels: u64) -> Result<(), InputErr
     ))
 }
 
-/// Refuses on the GPU path a scene with a deforming body (an animation or a vertex cache): its
-/// collision (inverse skinning into the rest pose's SDF, `cpu::deformed_sample`) has no kernel
-/// yet, and the rigid kernel would see only the rest pose.
-pub fn check_gpu_bodies(scene: &Scene) -> Result<(), InputError> {
-    let c = scene.checker();
-    match scene.bodies.iter().position(|b| b.deform.is_some()) {
-        None => Ok(()),
-        Some(i) => {
-            let b = &scene.bodies[i];
-            let key = match b.deform.as_ref().map(|d| &d.motion) {
-                Some(crate::scene::DeformMotion::Cache { .. }) => "cache",
-                _ => "animation",
-            };
-            Err(c.err(
-                &scene.body_table(i),
-                key,
-                "a deforming body collides on the CPU path only; the GPU kernels would see \
-                 only its rest pose",
-                "run with --backend cpu",
-            ))
-        }
-    }
-}
-
 /// Refuses, before any SDF is baked, bodies whose SDF nodes together would not fit the GPU's
 /// largest texture (the kernels read every body's nodes from one texture), naming the body
 /// with the most nodes and a spacing that fits (nodes fall with the cube of the spacing).
@@ -282,7 +258,18 @@ pub fn check_sdf_textures(scene: &Scene, max_texels: u64) -> Result<(), InputErr
     for (i, b) in scene.bodies.iter().enumerate() {
         let body = super::build_body(b, &c, &scene.body_table(i))?;
         let (_, dims) = crate::body::sdf::grid_for(&body, b.sdf_resolution, b.sdf_margin);
-        nodes.push(dims.iter().map(|&d| d as u64).product::<u64>());
+        let grid = dims.iter().map(|&d| d as u64).product::<u64>();
+        // A deforming body's words follow its nodes (`body::deformed_sdf`): a nearest triangle
+        // per node, then its rest mesh and weights (3 words per vertex, 3 per triangle, 5 per
+        // vertex's weights; its parts' boxes are a few hundred words more).
+        let deformed = match b.deform {
+            Some(_) => {
+                let mesh = &body.mesh;
+                grid + 8 * mesh.positions.len() as u64 + 3 * mesh.triangles.len() as u64 + 512
+            }
+            None => 0,
+        };
+        nodes.push(grid + deformed);
     }
     let total: u64 = nodes.iter().sum();
     if total <= max_texels {

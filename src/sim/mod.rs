@@ -257,13 +257,6 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
             ));
         }
     }
-    if scene.output.gltf && model.colliders.iter().any(|c| c.deformed.is_some()) {
-        warnings.push(
-            "the glTF export shows a deforming body in its rest pose (its motion is in the OBJ \
-             frames: output.obj = true)"
-                .into(),
-        );
-    }
     let (substeps, body_surface_speed, body_limited) = bodies::body_speed_substeps(
         &model,
         scene,

@@ -239,3 +239,35 @@ pub fn scene_with_fabric(rel: &str, fabric: &str) -> drapekit::scene::Scene {
 /// The fabric as a membrane (its warp, weft and shear from the scene's preset) whose warp runs
 /// at 30° to each panel's x axis: `scene_with_fabric`'s lines for a scene with a preset.
 pub const MEMBRANE_GRAIN_30: &str = "model = \"membrane\"\ngrain_deg = 30.0";
+
+/// A closed cube of half-size `h` m at the origin as OBJ text (quads), and its corners in
+/// the order of its `v` records.
+pub fn box_obj(h: f32) -> (String, Vec<glam::Vec3>) {
+    let corners: Vec<glam::Vec3> = (0..8)
+        .map(|i| {
+            let s = |b: u32| if i & b != 0 { h } else { -h };
+            glam::Vec3::new(s(1), s(2), s(4))
+        })
+        .collect();
+    let faces = [
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],
+    ];
+    let mut s: String = (corners.iter())
+        .map(|v| format!("v {} {} {}\n", v.x, v.y, v.z))
+        .collect();
+    for f in faces {
+        s.push_str(&format!(
+            "f {} {} {} {}\n",
+            f[0] + 1,
+            f[1] + 1,
+            f[2] + 1,
+            f[3] + 1
+        ));
+    }
+    (s, corners)
+}

@@ -123,7 +123,7 @@ impl Case {
         let bodies = (prep.params.num_bodies as usize).max(1);
         Case {
             elements: Elements::new(&prep.model),
-            planes: vec![Vec4::ZERO; bodies * n],
+            planes: vec![Vec4::ZERO; cpu::PLANE_BLOCKS * bodies * n],
             lambdas: vec![Vec4::ZERO; n],
             prep,
             state,
@@ -303,13 +303,29 @@ fn check_contact_planes(g: &mut GpuSolver, c: &mut Case) {
     let (mut planes, mut lambdas) = (c.planes.clone(), c.lambdas.clone());
     c.with(|s| cpu::contact_planes(s, &c.x, &sdfs, &mut planes, &mut lambdas));
     (c.planes, c.lambdas) = (planes, lambdas);
-    let got = g.solve_array(SolveArray::Planes).unwrap();
+    let all = g.solve_array(SolveArray::Planes).unwrap();
+    let (got, velocities) = all.split_at(bodies * c.prep.model.len());
+    let (cpu_planes, cpu_velocities) = c.planes.split_at(bodies * c.prep.model.len());
+    // The surface velocities: v + ω × (xₙ − t), each a few roundings (FMA may round each
+    // differently) of terms up to |v| + |ω|·2 m (the scenes lie within 2 m of the bodies'
+    // origins): 4ε of that.
+    let v_scale = (c.step.bodies.iter().take(bodies))
+        .map(|p| {
+            Vec3::from_slice(&p.velocity).length()
+                + 2.0 * Vec3::from_slice(&p.angular_velocity).length()
+        })
+        .fold(1e-3f32, f32::max);
+    within(
+        "contact_planes surface velocity (m/s)",
+        max_abs_diff(velocities, cpu_velocities),
+        4.0 * EPS * v_scale,
+    );
     // Far from a body the plane is (0, SDF_FAR) on both.
-    let near: Vec<(Vec4, Vec4)> = (got.iter().zip(&c.planes))
+    let near: Vec<(Vec4, Vec4)> = (got.iter().zip(cpu_planes))
         .filter(|(_, p)| p.w < 1.0)
         .map(|(a, b)| (*a, *b))
         .collect();
-    assert!((got.iter().zip(&c.planes)).all(|(a, b)| b.w < 1.0 || a == b));
+    assert!((got.iter().zip(cpu_planes)).all(|(a, b)| b.w < 1.0 || a == b));
     // The vertex's world position and its body-frame point are a few f32 operations on
     // coordinates of up to ~1.5 m (FMA may round one differently: 2ε·1.5 m ≈ 2e-7 m); that moves
     // the point within its 5 mm SDF cell by a fraction 4e-5 of the cell, so the trilinear

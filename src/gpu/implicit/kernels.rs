@@ -17,15 +17,18 @@ pub enum Include {
     BlockTexels,
     /// `kernels/multigrid.wgsl`: one row of each operation on a level's system.
     Multigrid,
+    /// `kernels/deformed_body.wgsl`: a deforming body's contact (binds nothing of its own).
+    DeformedBody,
 }
 
 impl Include {
     /// Every include.
-    pub const ALL: [Include; 4] = [
+    pub const ALL: [Include; 5] = [
         Include::Hierarchy,
         Include::Terms,
         Include::BlockTexels,
         Include::Multigrid,
+        Include::DeformedBody,
     ];
 
     /// Its file in `kernels/`, without `.wgsl`.
@@ -35,6 +38,7 @@ impl Include {
             Include::Terms => "implicit_terms",
             Include::BlockTexels => "block_texels",
             Include::Multigrid => "multigrid",
+            Include::DeformedBody => "deformed_body",
         }
     }
 
@@ -44,6 +48,7 @@ impl Include {
             Include::Terms => include_str!("../../../kernels/implicit_terms.wgsl"),
             Include::BlockTexels => include_str!("../../../kernels/block_texels.wgsl"),
             Include::Multigrid => include_str!("../../../kernels/multigrid.wgsl"),
+            Include::DeformedBody => include_str!("../../../kernels/deformed_body.wgsl"),
         }
     }
 }
@@ -305,8 +310,8 @@ impl SolveKernel {
     pub fn includes(self) -> &'static [Include] {
         use Include::*;
         match self {
-            SolveKernel::ContactPlanes
-            | SolveKernel::CorrectionFilter
+            SolveKernel::ContactPlanes => &[Terms, DeformedBody],
+            SolveKernel::CorrectionFilter
             | SolveKernel::LineEnergy
             | SolveKernel::ForceResidual => &[Terms],
             SolveKernel::Sweep | SolveKernel::Assemble => &[Hierarchy, Terms],
@@ -390,6 +395,7 @@ impl SolveKernel {
                 }
                 Include::BlockTexels => list.extend([(BlockTexels, false), (BlockColumns, false)]),
                 Include::Multigrid => list.extend([(Rhs, true), (E, true), (Residual, true)]),
+                Include::DeformedBody => {}
             }
         }
         list.extend(match self {

@@ -89,7 +89,8 @@ impl SolveBuffers {
             target: storage("vbd_y", vec4 * n)?,
             steps: storage("vbd_steps", 4 * (sizes.sweeps.max(1) + 1))?,
             control: storage("solve_control", std::mem::size_of::<SolveControl>())?,
-            planes: storage("contact_planes", vec4 * sizes.bodies * n)?,
+            // Planes, then surface velocities (cpu::PLANE_BLOCKS).
+            planes: storage("contact_planes", 2 * vec4 * sizes.bodies * n)?,
             lambdas: storage("contact_lambdas", vec4 * n)?,
             hier: storage("hierarchy", 4 * packed.words.len())?,
             blocks: storage("blocks", 48 * newton(packed.blocks as usize))?,
