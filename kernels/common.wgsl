@@ -138,6 +138,12 @@ fn unpack_hinge(a: vec4<u32>, b: vec4<u32>) -> Hinge {
     return Hinge(a, bitcast<f32>(b.x), bitcast<f32>(b.y), bitcast<f32>(b.z), b.w);
 }
 
+// The per-vertex coefficients (−c1 − c2, c1, c2) of a membrane image from its shape pair (cpu:
+// Membrane::coefficients).
+fn membrane_coefficients(c1: f32, c2: f32) -> vec3<f32> {
+    return vec3<f32>(-c1 - c2, c1, c2);
+}
+
 fn unpack_membrane(a: vec4<u32>, b: vec4<u32>, c: vec4<u32>) -> Membrane {
     return Membrane(a, bitcast<vec4<f32>>(b), bitcast<vec4<f32>>(c));
 }

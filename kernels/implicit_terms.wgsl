@@ -409,12 +409,6 @@ fn membrane_at(t: u32) -> Membrane {
     );
 }
 
-// The per-vertex coefficients (−c1 − c2, c1, c2) of an image from its shape pair (cpu:
-// membrane::coefficients).
-fn membrane_coefficients(c1: f32, c2: f32) -> vec3<f32> {
-    return vec3<f32>(-c1 - c2, c1, c2);
-}
-
 // Σ c_r·xₙ[v_r] as c₁(x₁ − x₀) + c₂(x₂ − x₀) (cpu: membrane::image over the start positions).
 fn membrane_start_image(m: Membrane, c: vec3<f32>) -> vec3<f32> {
     let x0 = prev(m.v.x).xyz;
@@ -451,17 +445,9 @@ fn membrane_step(m: Membrane) -> MembraneStep {
     );
 }
 
-// |w| − 1 for w = s + dw, as (|s| − 1) plus the change's share (cpu: MembraneStep::stretch).
+// |w| − 1 for w = s + dw: a spring of unit rest length (cpu: MembraneStep::stretch).
 fn membrane_stretch(s: vec3<f32>, dw: vec3<f32>) -> f32 {
-    let start_len = length(s);
-    let len = length(s + dw);
-    let grow = 2.0 * dot(s, dw) + dot(dw, dw);
-    let sum = len + start_len;
-    var share = 0.0;
-    if (sum > 0.0) {
-        share = grow / sum;
-    }
-    return (start_len - 1.0) + share;
+    return stretch(s, length(s), dw, length(s + dw), 1.0);
 }
 
 // Hessian of ½(|w| − 1)² in w, made positive semi-definite (cpu: membrane::stretch_hessian).

@@ -29,15 +29,6 @@ fn membrane_image(m: Membrane, c1: f32, c2: f32, which: u32) -> vec3<f32> {
     return c1 * (x1 - x0) + c2 * (x2 - x0);
 }
 
-// The coefficient of vertex `role` given c1, c2 (c0 = −c1 − c2).
-fn membrane_coefficient(c1: f32, c2: f32, role: u32) -> f32 {
-    switch role {
-        case 0u: { return -c1 - c2; }
-        case 1u: { return c1; }
-        default: { return c2; }
-    }
-}
-
 // One stretch condition's force on a vertex with coefficient c: −k·c·((|w| − 1) + τ·n̂·ẇ)·n̂.
 fn stretch_condition(w: vec3<f32>, dw: vec3<f32>, k: f32, c: f32, tau: f32) -> vec3<f32> {
     let len = length(w);
@@ -54,8 +45,8 @@ fn membrane_force(m: Membrane, role: u32) -> vec3<f32> {
     let wv = membrane_image(m, s.z, s.w, 0u);
     let du = membrane_image(m, s.x, s.y, 1u);
     let dv = membrane_image(m, s.z, s.w, 1u);
-    let a = membrane_coefficient(s.x, s.y, role);
-    let b = membrane_coefficient(s.z, s.w, role);
+    let a = membrane_coefficients(s.x, s.y)[role];
+    let b = membrane_coefficients(s.z, s.w)[role];
     let k = m.stiffness;
     let g = a * wv + b * wu;
     var f = -k.z * dot(wu, wv) * g - k.w * k.z * (dot(du, wv) + dot(wu, dv)) * g;

@@ -28,11 +28,16 @@ pub fn edge_strain_quantile(positions: &[Vec4], springs: &[Spring], q: f32) -> f
             (a.distance(b) - s.rest_length) / s.rest_length
         })
         .collect();
-    if strains.is_empty() {
+    quantile(&mut strains, q)
+}
+
+/// The `q`-quantile of `values` (reordered); 0 when there are none.
+fn quantile(values: &mut [f32], q: f32) -> f32 {
+    if values.is_empty() {
         return 0.0;
     }
-    let k = ((q.clamp(0.0, 1.0) * strains.len() as f32).ceil() as usize).clamp(1, strains.len());
-    *strains.select_nth_unstable_by(k - 1, f32::total_cmp).1
+    let k = ((q.clamp(0.0, 1.0) * values.len() as f32).ceil() as usize).clamp(1, values.len());
+    *values.select_nth_unstable_by(k - 1, f32::total_cmp).1
 }
 
 /// A membrane's strain at the last frame, per triangle along its threads and in shear.
@@ -64,14 +69,10 @@ pub fn thread_strain(positions: &[Vec4], membranes: &[Membrane]) -> Option<Threa
         let cos = wu.dot(wv) / (lu * lv).max(f32::MIN_POSITIVE);
         shears.push(cos.clamp(-1.0, 1.0).asin().abs().to_degrees());
     }
-    let quantile = |v: &mut Vec<f32>| {
-        let k = ((0.99 * v.len() as f32).ceil() as usize).clamp(1, v.len());
-        *v.select_nth_unstable_by(k - 1, f32::total_cmp).1
-    };
     Some(ThreadStrain {
         max: threads.iter().copied().fold(f32::MIN, f32::max),
-        p99: quantile(&mut threads),
-        shear_p99_deg: quantile(&mut shears),
+        p99: quantile(&mut threads, 0.99),
+        shear_p99_deg: quantile(&mut shears, 0.99),
     })
 }
 

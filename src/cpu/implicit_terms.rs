@@ -112,7 +112,7 @@ fn spring_hessian(k: f32, rest: f32, d: Vec3, len: f32) -> Mat3 {
 /// share (2·start·change + |change|²)/(|e| + |start|): |e| in f32 moves in steps of its ulp (1e-9 m
 /// at 2 cm), k times which is 2% of a 5 mm particle's weight, and the solve cannot balance a
 /// force that jumps; the split form is smooth in the change down to its own rounding.
-fn stretch(start: Vec3, start_len: f32, change: Vec3, len: f32, rest: f32) -> f32 {
+pub(crate) fn stretch(start: Vec3, start_len: f32, change: Vec3, len: f32, rest: f32) -> f32 {
     let grow = 2.0 * start.dot(change) + change.length_squared();
     let sum = len + start_len;
     (start_len - rest) + if sum > 0.0 { grow / sum } else { 0.0 }

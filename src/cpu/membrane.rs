@@ -23,12 +23,6 @@ fn v3(v: Vec4) -> Vec3 {
     v.truncate()
 }
 
-/// A membrane's per-vertex coefficients: w_u = Σ α_r·x_r, w_v = Σ β_r·x_r.
-pub fn coefficients(m: &Membrane) -> ([f32; 3], [f32; 3]) {
-    let [a1, a2, b1, b2] = m.shape;
-    ([-a1 - a2, a1, a2], [-b1 - b2, b1, b2])
-}
-
 /// Σ_r c_r·values[v_r] written as c₁(v₁ − v₀) + c₂(v₂ − v₀): differences of nearby values.
 pub fn image(m: &Membrane, c: &[f32; 3], values: &[Vec4]) -> Vec3 {
     let x = |r: usize| v3(values[m.v[r] as usize]);
@@ -38,7 +32,7 @@ pub fn image(m: &Membrane, c: &[f32; 3], values: &[Vec4]) -> Vec3 {
 
 /// The force of membrane `m` on its vertex `role` at positions `pos` and velocities `vel`.
 pub fn membrane_force(m: &Membrane, role: usize, pos: &[Vec4], vel: &[Vec4]) -> Vec3 {
-    let (a, b) = coefficients(m);
+    let (a, b) = m.coefficients();
     let [ku, kv, ks, tau] = m.stiffness;
     let (wu, wv) = (image(m, &a, pos), image(m, &b, pos));
     let (du, dv) = (image(m, &a, vel), image(m, &b, vel));
@@ -101,7 +95,7 @@ pub struct MembraneStep {
 impl MembraneStep {
     /// The membrane at start positions `prev` and displacements `d`.
     pub fn at(m: &Membrane, prev: &[Vec4], d: &[Vec4]) -> MembraneStep {
-        let (a, b) = coefficients(m);
+        let (a, b) = m.coefficients();
         MembraneStep {
             start: [image(m, &a, prev), image(m, &b, prev)],
             change: [image(m, &a, d), image(m, &b, d)],
@@ -122,10 +116,7 @@ impl MembraneStep {
     /// share, smooth in the change down to its own rounding (see `implicit_terms::stretch`).
     pub fn stretch(&self, c: usize) -> f32 {
         let (s, dw) = (self.start[c], self.change[c]);
-        let (start_len, len) = (s.length(), (s + dw).length());
-        let grow = 2.0 * s.dot(dw) + dw.length_squared();
-        let sum = len + start_len;
-        (start_len - 1.0) + if sum > 0.0 { grow / sum } else { 0.0 }
+        super::implicit_terms::stretch(s, s.length(), dw, (s + dw).length(), 1.0)
     }
 
     /// The coefficient of vertex `role` in condition `c`'s image.
@@ -224,7 +215,7 @@ impl MembraneStep {
     /// The mean diagonal of the part of vertex `role`'s block that does not depend on the
     /// state (for `Implicit::contact_stiffness`): each condition's k·c_r²·(1 + τ/h), |w| ≈ 1.
     pub fn constant_stiffness(m: &Membrane, role: usize, h: f32) -> f32 {
-        let (a, b) = coefficients(m);
+        let (a, b) = m.coefficients();
         let [ku, kv, ks, tau] = m.stiffness;
         let (ar, br) = (a[role], b[role]);
         (1.0 + tau / h) * (ku * ar * ar + kv * br * br + ks * (ar * ar + br * br)) / 3.0

@@ -170,6 +170,14 @@ pub struct Membrane {
     pub stiffness: [f32; 4],
 }
 
+impl Membrane {
+    /// The per-vertex coefficients (α₀, α₁, α₂) of w_u and (β₀, β₁, β₂) of w_v.
+    pub fn coefficients(&self) -> ([f32; 3], [f32; 3]) {
+        let [a1, a2, b1, b2] = self.shape;
+        ([-a1 - a2, a1, a2], [-b1 - b2, b1, b2])
+    }
+}
+
 /// A seam pair (WGSL `Seam`): vertex `v[0]` is pulled towards
 /// `(1 − weight)·x[v[1]] + weight·x[v[2]]`.
 #[repr(C)]

@@ -412,8 +412,7 @@ impl ClothModel {
         // norms along vertex r's row bounds the row, of which the springs' 2k convention takes
         // half. Its damping is τ times the same.
         for m in &self.membranes {
-            let [a1, a2, b1, b2] = m.shape;
-            let (a, b) = ([-a1 - a2, a1, a2], [-b1 - b2, b1, b2]);
+            let (a, b) = m.coefficients();
             let [ku, kv, ks, tau] = m.stiffness;
             let g = |r: usize| (a[r] * a[r] + b[r] * b[r]).sqrt();
             for r in 0..3 {
