@@ -3,10 +3,13 @@
 
 const WORKGROUP_SIZE: u32 = 64u;
 
-// Every per-particle and per-element array lives in a 2D texture, TEXELS_PER_ROW texels wide,
-// one 16-byte texel per element (positions, springs, ...) or one 4-byte texel (CSR offsets).
-// Reads are textureLoad, writes textureStore: software rasterisers such as llvmpipe fetch texels
-// as whole vectors, whereas storage-buffer reads go lane by lane and component by component.
+// Every per-particle and per-element array is written here as a 2D texture, TEXELS_PER_ROW
+// texels wide, one 16-byte texel per element (positions, springs, ...) or one 4-byte texel (CSR
+// offsets). Reads are textureLoad, writes textureStore: software rasterisers such as llvmpipe
+// fetch texels as whole vectors, whereas storage-buffer reads go lane by lane and component by
+// component. On GPUs the same arrays are storage buffers: src/gpu/array_layout.rs rewrites the
+// declarations and every `textureLoad(a, texel(i), 0)` / `textureStore(a, texel(i), v)` of them
+// into indexing before compiling, so accesses must keep exactly that form.
 const TEXELS_PER_ROW: u32 = 2048u;
 
 fn texel(i: u32) -> vec2<u32> {

@@ -42,13 +42,17 @@ pub struct AdapterReport {
     pub backend: String,
     /// "cpu", "discrete_gpu", …
     pub device_type: String,
+    /// Where the kernels' arrays live on an opened device: "textures" or "buffers".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub array_layout: Option<String>,
 }
 
 impl AdapterReport {
-    /// One line for reports: name, driver, API backend and device type.
+    /// One line for reports: name, driver, API backend, device type and array layout.
     pub fn describe(&self) -> String {
+        let layout = (self.array_layout.as_ref()).map_or(String::new(), |l| format!(", {l}"));
         format!(
-            "{} (driver {}, {}, device type {})",
+            "{} (driver {}, {}, device type {}{layout})",
             self.name, self.driver, self.backend, self.device_type
         )
     }

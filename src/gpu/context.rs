@@ -1,5 +1,6 @@
 //! Adapter choice and device creation.
 
+use super::array_layout::{ArrayLayout, BUFFER_LAYOUT_STORAGE_BUFFERS};
 use crate::error::Error;
 use crate::solver::AdapterReport;
 use std::str::FromStr;
@@ -144,14 +145,22 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// What the adapter could give (the device asks for less: see `new`).
     pub adapter_limits: wgpu::Limits,
+    /// Where the kernels' arrays live: textures or storage buffers.
+    pub layout: ArrayLayout,
     /// A device loss and the first uncaptured GPU error, recorded by wgpu's callbacks (which
     /// would otherwise panic) and turned into `Error::Gpu` by `check`.
     failure: std::sync::Arc<std::sync::Mutex<[Option<String>; 2]>>,
 }
 
 impl GpuContext {
-    /// Opens a device on the chosen adapter.
+    /// Opens a device on the chosen adapter, with its arrays laid out as `DRAPEKIT_GPU_LAYOUT`
+    /// says or as suits the adapter (see `ArrayLayout::choose`).
     pub fn new(choice: &AdapterChoice) -> Result<Self, Error> {
+        Self::open(choice, None)
+    }
+
+    /// Opens a device on the chosen adapter with the given array layout (`None`: as `new`).
+    pub fn open(choice: &AdapterChoice, layout: Option<ArrayLayout>) -> Result<Self, Error> {
         let instance = instance();
         let choice = match (choice, std::env::var("WGPU_ADAPTER_NAME")) {
             (AdapterChoice::Auto, Ok(name)) if !name.is_empty() => AdapterChoice::Named(name),
@@ -193,6 +202,16 @@ impl GpuContext {
         };
         let info = adapter.get_info();
         let available = adapter.limits();
+        let layout = match layout {
+            Some(layout) => layout.check(&info, &available),
+            None => ArrayLayout::choose(&info, &available),
+        }
+        .map_err(Error::Gpu)?;
+        // The buffer layout binds every texel array as a storage buffer.
+        let storage_buffers = match layout {
+            ArrayLayout::Textures => SOLVE_STORAGE_BUFFERS,
+            ArrayLayout::Buffers => BUFFER_LAYOUT_STORAGE_BUFFERS,
+        };
         // Kernels bind uniforms, sampled textures, write-only storage textures and storage
         // buffers. Implicit Euler's solve binds up to SOLVE_STORAGE_BUFFERS storage buffers per
         // kernel (more than the downlevel defaults' 4) and its largest arrays (the multigrid
@@ -200,7 +219,7 @@ impl GpuContext {
         // ask for what the adapter gives there (the solver checks what it needs against it).
         let required_limits = wgpu::Limits {
             max_texture_dimension_2d: available.max_texture_dimension_2d,
-            max_storage_buffers_per_shader_stage: SOLVE_STORAGE_BUFFERS
+            max_storage_buffers_per_shader_stage: storage_buffers
                 .min(available.max_storage_buffers_per_shader_stage),
             max_storage_buffer_binding_size: available.max_storage_buffer_binding_size,
             max_buffer_size: available.max_buffer_size,
@@ -235,6 +254,7 @@ impl GpuContext {
             queue,
             info,
             adapter_limits: available,
+            layout,
             failure,
         })
     }
@@ -267,7 +287,10 @@ impl GpuContext {
 
     /// The adapter as reported in summaries and benchmarks.
     pub fn report(&self) -> AdapterReport {
-        report(&self.info)
+        AdapterReport {
+            array_layout: Some(self.layout.name().to_string()),
+            ..report(&self.info)
+        }
     }
 }
 
@@ -285,5 +308,6 @@ fn report(info: &wgpu::AdapterInfo) -> AdapterReport {
             wgpu::DeviceType::Cpu => "cpu",
         }
         .to_string(),
+        array_layout: None,
     }
 }

@@ -1,5 +1,6 @@
 //! The wgpu path: adapter choice, kernel composition and the solver.
 
+mod array_layout;
 mod context;
 mod elements;
 mod encode;
@@ -10,6 +11,7 @@ mod readback;
 mod solver;
 mod texels;
 
+pub use array_layout::ArrayLayout;
 pub use context::{adapters, AdapterChoice, AdapterList, GpuContext};
 pub use readback::HashTables;
 pub use solver::GpuSolver;

@@ -1,8 +1,9 @@
 //! Stage pipelines: bind group layouts, bind groups and compute pipelines, built from one
 //! list of bindings per stage so that layout and group cannot disagree.
 
+use super::array_layout::bind_as_buffers;
 use super::context::GpuContext;
-use super::texels::TexelArray;
+use super::texels::{TexelArray, TexelStorage};
 use crate::model::layout::SubstepParams;
 use crate::plan::Pass;
 use std::num::NonZeroU64;
@@ -17,9 +18,9 @@ pub(super) enum Binding<'a> {
     Dynamic(&'a wgpu::Buffer, u64),
     /// An unused binding number (an optional kernel section that was left out).
     Gap,
-    /// Read with textureLoad.
+    /// Read with textureLoad (or by index, when the array is a buffer).
     Read(&'a TexelArray),
-    /// Written with textureStore.
+    /// Written with textureStore (or by index, when the array is a buffer).
     Write(&'a TexelArray),
     /// A storage buffer (u32 arrays and atomics of the spatial hash).
     Storage(&'a wgpu::Buffer, bool),
@@ -64,6 +65,13 @@ fn layout_entry(binding: u32, b: &Binding) -> wgpu::BindGroupLayoutEntry {
             min_binding_size: NonZeroU64::new(dynamic_size(b)),
         },
         Binding::Gap => unreachable!("gaps have no layout entry"),
+        Binding::Read(t) | Binding::Write(t) if t.is_buffer() => wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage {
+                read_only: matches!(b, Binding::Read(_)),
+            },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
         Binding::Read(t) => wgpu::BindingType::Texture {
             sample_type: t.sample_type(),
             view_dimension: wgpu::TextureViewDimension::D2,
@@ -103,10 +111,20 @@ fn group_entry<'a>(binding: u32, b: &Binding<'a>) -> wgpu::BindGroupEntry<'a> {
             })
         }
         Binding::Gap => unreachable!("gaps have no bind group entry"),
-        Binding::Read(t) | Binding::Write(t) => wgpu::BindingResource::TextureView(&t.view),
+        Binding::Read(t) | Binding::Write(t) => match &t.storage {
+            TexelStorage::Texture(_, view) => wgpu::BindingResource::TextureView(view),
+            TexelStorage::Buffer(buffer) => buffer.as_entire_binding(),
+        },
         Binding::Storage(buffer, _) => buffer.as_entire_binding(),
     };
     wgpu::BindGroupEntry { binding, resource }
+}
+
+/// `list`'s bindings numbered by their position in it.
+fn numbered<'a>(list: &[Binding<'a>]) -> Vec<(u32, Binding<'a>)> {
+    (list.iter().enumerate())
+        .map(|(i, b)| (i as u32, *b))
+        .collect()
 }
 
 /// A layout and one bind group per binding list (all lists have the same shape); each list's
@@ -116,12 +134,8 @@ fn bind_groups<const K: usize>(
     label: &str,
     lists: [&[Binding]; K],
 ) -> (wgpu::BindGroupLayout, [wgpu::BindGroup; K]) {
-    let numbered = lists.map(|list| {
-        (list.iter().enumerate())
-            .map(|(i, b)| (i as u32, *b))
-            .collect::<Vec<_>>()
-    });
-    numbered_bind_groups(device, label, numbered.each_ref().map(|l| &l[..]))
+    let lists = lists.map(numbered);
+    numbered_bind_groups(device, label, lists.each_ref().map(|l| &l[..]))
 }
 
 /// `bind_groups` with each binding's number given beside it.
@@ -165,11 +179,15 @@ pub(super) fn build_stage(
 ) -> Stage {
     let device = &ctx.device;
     let (layout0, groups) = bind_groups(device, pass.name(), state_bindings);
+    let force_in_bindings = force_in;
     let force_in = force_in.map(|b| bind_groups(device, "force_in", [b]));
     let mut layouts = vec![&layout0];
     if let Some((layout1, _)) = &force_in {
         layouts.push(layout1);
     }
+    let group0 = numbered(state_bindings[0]);
+    let group1 = force_in_bindings.map(numbered).unwrap_or_default();
+    let source = bind_as_buffers(source, &[(0, &group0), (1, &group1)]);
     let pipeline = compute_pipeline(device, pass.name(), source, "main", &layouts);
     Stage {
         pass,

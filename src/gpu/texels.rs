@@ -1,20 +1,27 @@
-//! One-dimensional arrays stored in 2D textures `TEXELS_PER_ROW` texels wide, one element per
-//! texel. Kernels read them with `textureLoad(t, texel(i), 0)` (see common.wgsl for why
-//! textures rather than storage buffers).
+//! One-dimensional arrays of one texel per element, stored as 2D textures `TEXELS_PER_ROW`
+//! texels wide or as storage buffers of the same bytes (the context's `ArrayLayout`). Kernels
+//! read them with `textureLoad(t, texel(i), 0)`; see array_layout.rs for the buffer form.
 
+use super::array_layout::ArrayLayout;
 use super::context::GpuContext;
 use crate::error::Error;
 use crate::model::layout::TEXELS_PER_ROW;
 
-/// A texture holding `len` elements of one texel each, in rows of `TEXELS_PER_ROW`.
+/// `len` elements of one texel each, in rows of `TEXELS_PER_ROW`.
 pub struct TexelArray {
-    /// The texture.
-    pub texture: wgpu::Texture,
-    /// Its only view.
-    pub view: wgpu::TextureView,
+    /// The texture or buffer.
+    pub storage: TexelStorage,
     /// Texel format: Rgba32Float, R32Float, Rgba32Uint or R32Uint.
     pub format: wgpu::TextureFormat,
     rows: u32,
+}
+
+/// Where a texel array's bytes live.
+pub enum TexelStorage {
+    /// A texture and its only view.
+    Texture(wgpu::Texture, wgpu::TextureView),
+    /// A storage buffer holding the texture's rows one after another.
+    Buffer(wgpu::Buffer),
 }
 
 impl TexelArray {
@@ -35,24 +42,21 @@ impl TexelArray {
                  adapter's textures have at most {max_rows}; use a coarser mesh"
             )));
         }
-        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width: TEXELS_PER_ROW,
-                height: rows as u32,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: usage | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        });
-        let view = texture.create_view(&Default::default());
+        let storage = match ctx.layout.for_array(label) {
+            ArrayLayout::Textures => texture_storage(ctx, label, format, rows as u32, usage),
+            ArrayLayout::Buffers => {
+                TexelStorage::Buffer(ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: TEXELS_PER_ROW as u64 * rows as u64 * texel_bytes(format) as u64,
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                }))
+            }
+        };
         Ok(TexelArray {
-            texture,
-            view,
+            storage,
             format,
             rows: rows as u32,
         })
@@ -107,12 +111,20 @@ impl TexelArray {
     pub fn write(&self, queue: &wgpu::Queue, bytes: &[u8]) {
         let mut padded = bytes.to_vec();
         padded.resize(self.padded_bytes() as usize, 0);
-        queue.write_texture(
-            self.texture.as_image_copy(),
-            &padded,
-            self.layout(0),
-            self.extent(),
-        );
+        match &self.storage {
+            TexelStorage::Texture(texture, _) => queue.write_texture(
+                texture.as_image_copy(),
+                &padded,
+                self.layout(0),
+                self.extent(),
+            ),
+            TexelStorage::Buffer(buffer) => queue.write_buffer(buffer, 0, &padded),
+        }
+    }
+
+    /// Whether the array is a storage buffer.
+    pub fn is_buffer(&self) -> bool {
+        matches!(self.storage, TexelStorage::Buffer(_))
     }
 
     /// Records a copy of the whole texture into `buffer` at `offset`.
@@ -122,14 +134,19 @@ impl TexelArray {
         buffer: &wgpu::Buffer,
         offset: u64,
     ) {
-        encoder.copy_texture_to_buffer(
-            self.texture.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer,
-                layout: self.layout(offset),
-            },
-            self.extent(),
-        );
+        match &self.storage {
+            TexelStorage::Texture(texture, _) => encoder.copy_texture_to_buffer(
+                texture.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer,
+                    layout: self.layout(offset),
+                },
+                self.extent(),
+            ),
+            TexelStorage::Buffer(source) => {
+                encoder.copy_buffer_to_buffer(source, 0, buffer, offset, self.padded_bytes())
+            }
+        }
     }
 
     /// How a kernel reads this array: `texture_2d<f32>` or `texture_2d<u32>`.
@@ -141,6 +158,32 @@ impl TexelArray {
             _ => wgpu::TextureSampleType::Uint,
         }
     }
+}
+
+/// A texture of `rows` rows of `TEXELS_PER_ROW` texels.
+fn texture_storage(
+    ctx: &GpuContext,
+    label: &str,
+    format: wgpu::TextureFormat,
+    rows: u32,
+    usage: wgpu::TextureUsages,
+) -> TexelStorage {
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: TEXELS_PER_ROW,
+            height: rows,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: usage | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let view = texture.create_view(&Default::default());
+    TexelStorage::Texture(texture, view)
 }
 
 fn texel_bytes(format: wgpu::TextureFormat) -> usize {

@@ -5,6 +5,7 @@ use super::hierarchy::Packed;
 use super::kernels::{Res, SolveKernel};
 use super::layout::{OpParams, SolveControl, SolveScalars};
 use crate::error::Error;
+use crate::gpu::array_layout::bind_as_buffers;
 use crate::gpu::context::GpuContext;
 use crate::gpu::elements::{element_arrays, Elements};
 use crate::gpu::kernels::VbdEnergies;
@@ -274,7 +275,7 @@ impl<'a> Resources<'a> {
         let (l0, l1) = (list(0), list(1));
         let label = kernel.file();
         let (layout, groups) = numbered_bind_groups(device, label, [&l0[..], &l1[..]]);
-        let source = kernel.compose(energies).source;
+        let source = bind_as_buffers(kernel.compose(energies).source, &[(0, &l0)]);
         let pipeline = compute_pipeline(device, label, source, kernel.entry(), &[&layout]);
         KernelPipeline { pipeline, groups }
     }
