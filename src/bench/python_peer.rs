@@ -113,6 +113,7 @@ impl PeerRecord {
     /// The device in words, e.g. "Warp's cuda:0 (NVIDIA H100 80GB HBM3)".
     pub fn device_description(&self) -> String {
         match (&self.device, &self.device_name) {
+            (Some(d), _) if d == "cpu" => "Warp's CPU device".into(),
             (Some(d), Some(n)) if n != d => format!("Warp's {d} ({n})"),
             (Some(d), _) => format!("Warp's {d}"),
             _ => "Warp's CPU device".into(),
@@ -370,4 +371,34 @@ pub fn run_driver(env: &PythonEnv, args: &[String]) -> Result<Vec<PeerRecord>, E
             })
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PeerRecord;
+
+    fn record(device: &str) -> PeerRecord {
+        let json = format!(
+            r#"{{"system": "newton", "integrator": "implicit", "solver": "SolverVBD", "grid": 8,
+            "particles": 64, "springs": 306, "rest_length_sum": 1.0, "pinned": 2, "mass": 0.1,
+            "spacing": 0.1, "stiffness": [1000.0], "damping": [10.0], "fps": 60.0,
+            "benchmark_substeps": 16, "substeps": 10, "iterations": 10, "frames": 2,
+            "median_frame_seconds": 0.01, "state": "s.f32"{device}}}"#
+        );
+        serde_json::from_str(&json).unwrap()
+    }
+
+    #[test]
+    fn a_record_names_its_device_and_whether_it_is_cuda() {
+        let cuda = record(r#", "device": "cuda:0", "device_name": "NVIDIA H200""#);
+        assert!(cuda.on_cuda());
+        assert_eq!(cuda.device_description(), "Warp's cuda:0 (NVIDIA H200)");
+        let cpu = record(r#", "device": "cpu", "device_name": "cpu""#);
+        assert!(!cpu.on_cuda());
+        assert_eq!(cpu.device_description(), "Warp's CPU device");
+        // A driver from before the device field ran on the CPU.
+        let old = record("");
+        assert!(!old.on_cuda());
+        assert_eq!(old.device_description(), "Warp's CPU device");
+    }
 }
