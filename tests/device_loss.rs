@@ -5,7 +5,7 @@
 mod common;
 
 use drapekit::error::Error;
-use drapekit::gpu::{AdapterChoice, GpuContext, GpuSolver};
+use drapekit::gpu::{GpuContext, GpuSolver};
 use drapekit::scene::Scene;
 use drapekit::sim::{prepare, simulate, RunStats};
 use drapekit::solver::Solver;
@@ -16,7 +16,7 @@ fn a_lost_device_ends_the_run_with_a_clear_error() {
     if common::gpu().is_none() {
         return;
     }
-    let ctx = GpuContext::new(&AdapterChoice::Fallback).unwrap();
+    let ctx = GpuContext::new(&common::test_adapter()).unwrap();
     let mut scene = Scene::load(&common::fixture("scenes/hanging_cloth.toml")).unwrap();
     scene.solver.frames = 6;
     let prep = prepare(&scene).unwrap();

@@ -3,14 +3,14 @@
 
 mod common;
 
-use common::{fixture, gpu, max_abs_diff, max_norm, perturbed};
+use common::{fixture, gpu, max_abs_diff, max_norm, on_fallback, perturbed};
 use drapekit::cpu::CpuSolver;
 use drapekit::gpu::GpuSolver;
 use drapekit::model::layout::{SubstepParams, INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC};
 use drapekit::plan::{HingeEvaluation, Pass};
 use drapekit::scene::Scene;
 use drapekit::sim::{prepare, simulate, substep_params, Prepared, RunStats};
-use drapekit::solver::Solver;
+use drapekit::solver::{ParticleState, Solver};
 
 /// The flag scene (springs, bending, wind: every pass) from a perturbed state.
 fn flag() -> Prepared {
@@ -42,7 +42,8 @@ fn pass_parity_in(prep: Prepared, pass: Pass) {
     if pass == Pass::Integrate {
         // Forces are zero here, so integrate adds dt·(g − γv) to v and dt·v to x. Positions are
         // O(2 m) and f32 has a 2^-24 relative step: one rounding of each term gives ≤ 4e-7 m,
-        // and FMA contraction on the GPU may differ by one such rounding.
+        // and FMA contraction on the GPU may differ by one such rounding (on any adapter:
+        // integrate divides by nothing, so WGSL's 2.5-ULP division does not enter).
         let g = gpu.state().unwrap();
         let dx = max_abs_diff(&g.positions, &cpu.pos);
         let dv = max_abs_diff(&g.velocities, &cpu.vel);
@@ -78,6 +79,9 @@ fn pass_parity_in(prep: Prepared, pass: Pass) {
         // worst amplification is the cancellation in (|d| − L0): |d| ≈ 3 cm carries a rounding of
         // 2^-24·3 cm ≈ 2e-9 m against stretches of ~1 mm, a relative 2e-6 of the term. So the
         // two backends may differ by a few 1e-6 of the largest force; 2e-5 leaves 10× margin.
+        // The bound holds on any conforming adapter: a 2.5-ULP division or `inverseSqrt`
+        // (1.5e-7 relative) and FMA contraction (half an ULP per a·b + c) add far less than the
+        // cancellation's 2e-6.
         let f_gpu = gpu.forces().unwrap();
         let scale = max_norm(&cpu.force);
         assert!(scale > 0.0, "{} produced no force", pass.name());
@@ -314,19 +318,27 @@ fn trajectory_parity_of(mut scene: Scene, integrator: u32) {
     .unwrap();
     let mut cpu_frames = Vec::new();
     simulate(&prep, &mut cpu, &mut RunStats::default(), |_, s| {
-        cpu_frames.push(s.positions.clone());
+        cpu_frames.push(s.clone());
         Ok(())
     })
     .unwrap();
+    let mut gpu_frames = Vec::new();
+    simulate(&prep, &mut gpu, &mut RunStats::default(), |_, s| {
+        gpu_frames.push(s.clone());
+        Ok(())
+    })
+    .unwrap();
+    if !on_fallback() {
+        trajectory_parity_on_hardware(&prep, &cpu_frames, &gpu_frames);
+        return;
+    }
     let mut worst = (0.0f32, 0usize);
-    simulate(&prep, &mut gpu, &mut RunStats::default(), |f, s| {
-        let d = max_abs_diff(&s.positions, &cpu_frames[f as usize]);
+    for (f, (g, c)) in gpu_frames.iter().zip(&cpu_frames).enumerate() {
+        let d = max_abs_diff(&g.positions, &c.positions);
         if d > worst.0 {
-            worst = (d, f as usize);
+            worst = (d, f);
         }
-        Ok(())
-    })
-    .unwrap();
+    }
     let steps = prep.frames as f32 * prep.substeps as f32;
     // Each substep may round differently on the two backends by ~1 ulp of a 1.5 m position
     // (2^-24·1.5 ≈ 9e-8 m). The scene is damped (ζ = 0.1 per spring, 0.2/s air) and hangs
@@ -340,6 +352,94 @@ fn trajectory_parity_of(mut scene: Scene, integrator: u32) {
         worst.0,
         worst.1
     );
+}
+
+/// The trajectory check on an adapter other than the fallback one. A hardware GPU may round each
+/// substep differently from the CPU twin: WGSL lets it contract a·b + c into an FMA and gives
+/// division and `inverseSqrt` 2.5 ULP, so a substep's position may differ by a few roundings
+/// rather than the fallback adapter's none. The hanging sheet, pinned at its two top corners,
+/// wrinkles in its plane as it falls and swings, and which way a wrinkle goes is decided on the
+/// last bit: after that the positions part by centimetres (the mirror image x → −x is as right
+/// as the original). So the positions are compared only while the CPU's own rounding does not
+/// grow (before the first buckling), and every frame compares summaries that do not change
+/// under that mirror image: the mean height, the mean |x| (the sheet's width) and the kinetic
+/// energy.
+///
+/// The yardstick is the CPU itself: a second CPU run with noise of one rounding of every
+/// position coordinate (up to 2^-24 of its own size, so that a coordinate that is exactly 0
+/// stays 0, as rounding leaves it) added after each substep. The GPU differs from
+/// the CPU by at most `ROUNDINGS` such roundings a substep (an FMA or a 2.5-ULP division
+/// changes a result by ≤ 2.5 of its ULPs; a position update is a handful of such operations
+/// deep, so 4 covers one substep), and a small difference grows in proportion to its size, so:
+/// - before the noisy run's spread exceeds the linear bound `substeps · 9e-8 m` (it has not
+///   buckled yet), the positions differ by at most ROUNDINGS × that linear bound;
+/// - at every frame, each summary differs by at most 2·ROUNDINGS × the noisy run's spread of
+///   that summary (2× for the randomness of one noisy run), plus the rounding of the summary
+///   itself (a sum of n terms in f32: n·2^-24 relative, at most 1e-4 for these sheets).
+fn trajectory_parity_on_hardware(
+    prep: &Prepared,
+    cpu_frames: &[ParticleState],
+    gpu_frames: &[ParticleState],
+) {
+    const ROUNDINGS: f32 = 4.0;
+    let mut noisy = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let mut rng = common::Rng::new(11);
+    let mut buckled = false;
+    for frame in 1..cpu_frames.len() {
+        for step in substep_params(prep, frame as u32) {
+            noisy.advance(std::slice::from_ref(&step)).unwrap();
+            let mut s = noisy.state().unwrap();
+            for p in s.positions.iter_mut().filter(|p| p.w != 0.0) {
+                let noise = rng.vec3(f32::EPSILON / 2.0) * p.truncate().abs();
+                *p += noise.extend(0.0);
+            }
+            noisy.set_state(&s);
+        }
+        let (c, g, n) = (
+            &cpu_frames[frame],
+            &gpu_frames[frame],
+            noisy.state().unwrap(),
+        );
+        let linear = (frame as u32 * prep.substeps) as f32 * 9e-8;
+        let spread = max_abs_diff(&c.positions, &n.positions);
+        buckled |= spread > linear;
+        let apart = max_abs_diff(&c.positions, &g.positions);
+        let (sc, sg, sn) = (summary(prep, c), summary(prep, g), summary(prep, &n));
+        eprintln!(
+            "frame {frame}: GPU {apart:.2e} m from the CPU, noisy CPU {spread:.2e} m{}; \
+             summaries CPU {sc:?} GPU {sg:?} noisy {sn:?}",
+            if buckled { " (buckled)" } else { "" }
+        );
+        if !buckled {
+            assert!(
+                apart <= ROUNDINGS * linear,
+                "frame {frame}: positions {apart} m apart before buckling, bound {}",
+                ROUNDINGS * linear
+            );
+        }
+        for i in 0..3 {
+            let bound = 2.0 * ROUNDINGS as f64 * (sn[i] - sc[i]).abs() + 1e-4 * sc[i].abs();
+            assert!(
+                (sg[i] - sc[i]).abs() <= bound,
+                "frame {frame}: summary {i} (mean height, mean |x|, kinetic energy) GPU {} vs \
+                 CPU {} (bound {bound})",
+                sg[i],
+                sc[i]
+            );
+        }
+    }
+}
+
+/// The mean height in m, the mean |x| in m and the kinetic energy in J: what the mirror image
+/// x → −x of the sheet leaves as it is.
+fn summary(prep: &Prepared, s: &ParticleState) -> [f64; 3] {
+    let n = s.positions.len() as f64;
+    let height = s.positions.iter().map(|p| p.y as f64).sum::<f64>() / n;
+    let width = s.positions.iter().map(|p| p.x.abs() as f64).sum::<f64>() / n;
+    let energy = (s.velocities.iter().zip(&prep.model.masses))
+        .map(|(v, &m)| 0.5 * m as f64 * v.truncate().length_squared() as f64)
+        .sum::<f64>();
+    [height, width, energy]
 }
 
 #[test]

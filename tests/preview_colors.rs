@@ -4,7 +4,6 @@
 
 mod common;
 
-use drapekit::gpu::AdapterChoice;
 use drapekit::preview::{
     draw_legend, render, srgb_byte, strain_legend, strain_ramp, CameraChoice, CameraPreset,
     ColorMode, DrawMesh, Look, Previewer,
@@ -50,7 +49,7 @@ fn strain_colours_of_a_stretched_sheet_follow_the_colour_map() {
         p.x *= if p.x < 0.0 { 1.05 } else { 1.15 };
     }
     let dir = run_folder("strain-map", &[(0, &rest), (1, &now)]);
-    let mut previewer = Previewer::new(&dir, None, 24.0, &AdapterChoice::Fallback).unwrap();
+    let mut previewer = Previewer::new(&dir, None, 24.0, &common::test_adapter()).unwrap();
     let (w, h) = (200u32, 150u32);
     let look = Look {
         camera: CameraChoice::Preset(CameraPreset::Front),
@@ -264,7 +263,7 @@ fn fabric_mode_colours_each_panel_and_lays_a_checker_over_the_pattern() {
     let frame = drapekit::preview::read_obj(&dir.join("frame_0000.obj")).unwrap();
     assert_eq!(frame.uv.len(), m.positions.len());
     assert_eq!(*frame.groups.iter().max().unwrap(), 1);
-    let mut previewer = Previewer::new(&dir, None, 24.0, &AdapterChoice::Fallback).unwrap();
+    let mut previewer = Previewer::new(&dir, None, 24.0, &common::test_adapter()).unwrap();
     let (w, h) = (200u32, 150u32);
     let look = Look {
         camera: CameraChoice::Preset(CameraPreset::Front),

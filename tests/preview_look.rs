@@ -5,7 +5,6 @@
 
 mod common;
 
-use drapekit::gpu::AdapterChoice;
 use drapekit::preview::{
     ambient_occlusion, render_textured, scene_look, srgb_byte, CameraPreset, ColorMode, DrawMesh,
     FabricTexture, Previewer, TURNTABLE_STEPS,
@@ -186,7 +185,7 @@ fn a_turntable_goes_all_the_way_round() {
         text += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
     }
     std::fs::write(dir.join("frame_0000.obj"), text).unwrap();
-    let mut previewer = Previewer::new(&dir, None, 24.0, &AdapterChoice::Fallback).unwrap();
+    let mut previewer = Previewer::new(&dir, None, 24.0, &common::test_adapter()).unwrap();
     let mut look = scene_look(None, ColorMode::Fabric);
     look.size = (64, 48);
     let gif = dir.join("spin.gif");

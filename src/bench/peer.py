@@ -1,5 +1,6 @@
 """drapekit's driver for `drapekit bench peer`: times NVIDIA Warp's own cloth benchmark classes
-and NVIDIA Newton's cloth solvers on the CPU, from the installed wheels.
+and NVIDIA Newton's cloth solvers, from the installed wheels, on Warp's first CUDA device when
+CUDA is there and on its CPU device otherwise (`--device cpu|cuda|auto`).
 
 drapekit writes this file into its Python environment and runs it there. Nothing of Warp or
 Newton is copied here: Warp's `Cloth` class and the benchmark's settings are read from the
@@ -12,9 +13,9 @@ Each measured point is printed on stdout as one line `PEER {json}`; everything e
 stderr. Commands:
 
     peer.py versions
-    peer.py warp   --sizes 64,128 --frames 60 --state-dir DIR
+    peer.py warp   --sizes 64,128 --frames 60 --state-dir DIR [--device auto|cpu|cuda]
     peer.py newton --solver semi_implicit|vbd --sizes 64 --frames 60 --substeps 16
-                   [--iterations 10] --state-dir DIR
+                   [--iterations 10] --state-dir DIR [--device auto|cpu|cuda]
 """
 
 import argparse
@@ -84,6 +85,24 @@ def describe_cloth(cloth, settings, cloth_args):
     }
 
 
+def resolve_device(choice):
+    """Warp's device for `choice`: "cuda" and "auto" (when CUDA is there) take "cuda:0"."""
+    import warp as wp  # noqa: PLC0415
+
+    if choice == "cpu" or (choice == "auto" and not wp.is_cuda_available()):
+        return "cpu"
+    if not wp.is_cuda_available():
+        sys.exit("--device cuda: Warp finds no CUDA device (driver missing?); use --device cpu")
+    return "cuda:0"
+
+
+def device_record(device):
+    """The device as the report names it."""
+    import warp as wp  # noqa: PLC0415
+
+    return {"device": device, "device_name": str(wp.get_device(device).name)}
+
+
 def time_frames(frames, step):
     """Seconds of each of `frames` calls to `step()`."""
     times = []
@@ -108,11 +127,12 @@ def run_warp(args):
     sys.path.insert(0, benchmarks_dir())
     import benchmark_cloth_warp  # noqa: PLC0415  (clears the kernel cache, as the benchmark does)
 
+    device = resolve_device(args.device)
     for dim in args.sizes:
         cloth, settings, cloth_args = warp_benchmark(dim)
-        integrator = benchmark_cloth_warp.WpIntegrator(cloth, "cpu")
+        integrator = benchmark_cloth_warp.WpIntegrator(cloth, device)
         # Compile the kernels before the clock starts (the benchmark's own warm-up is dead code).
-        wp.load_module(benchmark_cloth_warp, device="cpu")
+        wp.load_module(benchmark_cloth_warp, device=device)
         frame_dt, substeps = settings["sim_dt"], settings["sim_substeps"]
         positions = []
 
@@ -121,6 +141,7 @@ def run_warp(args):
 
         times = time_frames(args.frames, step)
         record = describe_cloth(cloth, settings, cloth_args)
+        record.update(device_record(device))
         record.update(
             system="warp",
             integrator="symplectic",
@@ -134,7 +155,7 @@ def run_warp(args):
         emit(record)
 
 
-def newton_model(cloth, settings, solver):
+def newton_model(cloth, settings, solver, device):
     """Warp's benchmark cloth as a Newton model: the same particles, masses, pins and springs
     (no triangles, so no triangle forces or contacts), gravity along −y as in the benchmark."""
     import newton  # noqa: PLC0415
@@ -154,7 +175,7 @@ def newton_model(cloth, settings, solver):
 
         edges = wp.array(np.sort(pairs, axis=1).astype(np.int32), dtype=int, device="cpu")
         builder.set_coloring(color_graph(builder.particle_count, edges))
-    model = builder.finalize(device="cpu")
+    model = builder.finalize(device=device)
     # The like-for-like case: no particle-particle hash grid.
     model.particle_grid = None
     return model
@@ -164,9 +185,10 @@ def run_newton(args):
     import newton  # noqa: PLC0415
     import warp as wp  # noqa: PLC0415
 
+    device = resolve_device(args.device)
     for dim in args.sizes:
         cloth, settings, cloth_args = warp_benchmark(dim)
-        model = newton_model(cloth, settings, args.solver)
+        model = newton_model(cloth, settings, args.solver, device)
         if args.solver == "semi_implicit":
             solver = newton.solvers.SolverSemiImplicit(model, enable_tri_contact=False)
         else:
@@ -186,12 +208,12 @@ def run_newton(args):
         advance([model.state(), model.state()], 1)
         wp.synchronize()
         states = [model.state(), model.state()]
-        # Newton's cloth examples replay a captured graph on the CPU too (it saves Python's
-        # launch overhead). A graph replays fixed buffers: with an even substep count the
-        # ping-pong pair is back in place at the end of each frame.
+        # Newton's cloth examples replay a captured graph (a CUDA graph on the GPU; on the CPU
+        # it saves Python's launch overhead too). A graph replays fixed buffers: with an even
+        # substep count the ping-pong pair is back in place at the end of each frame.
         graph = None
         if args.substeps % 2 == 0:
-            with wp.ScopedCapture(device="cpu") as capture:
+            with wp.ScopedCapture(device=device) as capture:
                 advance(states, args.substeps)
             graph = capture.graph
 
@@ -204,6 +226,7 @@ def run_newton(args):
 
         times = time_frames(args.frames, step)
         record = describe_cloth(cloth, settings, cloth_args)
+        record.update(device_record(device))
         record.update(
             system="newton",
             integrator="symplectic" if args.solver == "semi_implicit" else "implicit",
@@ -239,6 +262,7 @@ def main():
         p.add_argument("--sizes", type=lambda s: [int(x) for x in s.split(",")], required=True)
         p.add_argument("--frames", type=int, required=True)
         p.add_argument("--state-dir", required=True)
+        p.add_argument("--device", choices=["auto", "cpu", "cuda"], default="auto")
         if name == "newton":
             p.add_argument("--solver", choices=["semi_implicit", "vbd"], required=True)
             p.add_argument("--substeps", type=int, required=True)

@@ -1,6 +1,6 @@
 //! `drapekit bench peer`: drapekit beside NVIDIA Warp's own cloth benchmark (Warp's classes,
-//! from the installed wheel, on Warp's CPU device) and NVIDIA Newton's semi-implicit and VBD
-//! cloth solvers on the CPU, on the same cloth ([`super::warp_cloth`]), in one run.
+//! from the installed wheel) and NVIDIA Newton's semi-implicit and VBD cloth solvers, on
+//! Warp's first CUDA device when there is one and its CPU device otherwise, on the same cloth ([`super::warp_cloth`]), in one run.
 //!
 //! Every point times `frames` output frames from rest; a frame is the substeps of 1/60 s and
 //! a read-back of the positions (Warp's benchmark returns them every frame). The median frame
@@ -9,7 +9,7 @@
 //! integrator are the same; for the implicit rows it is the implicit step's distance from the
 //! small explicit step.
 
-use super::python_peer::{ensure_env, run_driver, PeerRecord, PythonEnv};
+use super::python_peer::{ensure_env, run_driver, use_python, PeerRecord, PythonEnv};
 use super::{cpu_threads_description, warp_cloth};
 use crate::cpu::CpuSolver;
 use crate::error::{Error, InputError};
@@ -26,9 +26,9 @@ use std::time::Instant;
 pub enum System {
     /// drapekit's CPU and GPU paths.
     Drapekit,
-    /// Warp's own benchmark (`WpIntegrator`) on Warp's CPU device.
+    /// Warp's own benchmark (`WpIntegrator`) on Warp's device (CUDA or the CPU).
     Warp,
-    /// Newton's `SolverSemiImplicit` and `SolverVBD` on the CPU.
+    /// Newton's `SolverSemiImplicit` and `SolverVBD` on Warp's device.
     Newton,
 }
 
@@ -69,6 +69,12 @@ pub struct PeerOptions {
     pub python: String,
     /// The environment's folder.
     pub venv: PathBuf,
+    /// Run the driver with `python` itself (its own warp and newton, any version) instead of
+    /// the pinned environment; `venv` then only holds the driver.
+    pub no_venv: bool,
+    /// Warp's device for the peers: "auto" (CUDA when Warp finds it, else the CPU), "cpu" or
+    /// "cuda".
+    pub peer_device: String,
     /// The command as typed, for the report.
     pub command: String,
 }
@@ -270,7 +276,7 @@ fn peer_row(r: &PeerRecord, warp_state: Option<&[Vec3]>) -> Result<PeerRow, Erro
     let state = read_state(&r.state)?;
     Ok(PeerRow {
         system: r.system.clone(),
-        backend: "cpu",
+        backend: if r.on_cuda() { "gpu" } else { "cpu" },
         integrator: if r.integrator == "implicit" {
             "implicit"
         } else {
@@ -284,10 +290,11 @@ fn peer_row(r: &PeerRecord, warp_state: Option<&[Vec3]>) -> Result<PeerRow, Erro
         frames: r.frames,
         median_frame_seconds: r.median_frame_seconds,
         max_distance_to_warp_m: warp_state.map(|w| max_distance(&state, w)),
-        device: match &r.solver {
-            Some(s) => format!("{s} on Warp's CPU device"),
-            None => "WpIntegrator on Warp's CPU device".into(),
-        },
+        device: format!(
+            "{} on {}",
+            r.solver.as_deref().unwrap_or("WpIntegrator"),
+            r.device_description()
+        ),
     })
 }
 
@@ -381,7 +388,11 @@ fn peer_or_note(
 pub fn run_cli(opts: &PeerOptions) -> Result<PeerReport, Error> {
     let wants = |s: System| opts.systems.contains(&s);
     let env = if wants(System::Warp) || wants(System::Newton) {
-        Some(ensure_env(&opts.python, &opts.venv)?)
+        Some(if opts.no_venv {
+            use_python(&opts.python, &opts.venv)?
+        } else {
+            ensure_env(&opts.python, &opts.venv)?
+        })
     } else {
         None
     };
@@ -428,11 +439,20 @@ fn measure(
     for &dim in &all_sizes {
         let model = warp_cloth::model(dim);
         if let (Some(env), true) = (env, wants(System::Warp)) {
-            let args: Vec<String> = ["warp", "--sizes", &dim.to_string(), "--frames", &frames]
-                .iter()
-                .map(|s| s.to_string())
-                .chain(["--state-dir".to_string(), state_dir.clone()])
-                .collect();
+            let args: Vec<String> = [
+                "warp",
+                "--sizes",
+                &dim.to_string(),
+                "--frames",
+                &frames,
+                "--device",
+                &opts.peer_device,
+                "--state-dir",
+                &state_dir,
+            ]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
             let records = peer_or_note(run_driver(env, &args), "warp", report);
             for r in &records {
                 check_same_cloth(r, &model, env)?;
@@ -483,6 +503,8 @@ fn measure(
                 &substeps.to_string(),
                 "--iterations",
                 &opts.iterations.to_string(),
+                "--device",
+                &opts.peer_device,
                 "--state-dir",
                 &state_dir,
             ]
@@ -522,11 +544,12 @@ fn measure(
                     && r.integrator == "symplectic"
             })
         };
-        if let Some(w) = find("warp", "cpu") {
+        if let Some(w) = find("warp", "cpu").or_else(|| find("warp", "gpu")) {
+            let warp_on = if w.backend == "gpu" { "CUDA" } else { "CPU" };
             for backend in ["cpu", "gpu"] {
                 if let Some(d) = find("drapekit", backend) {
                     println!(
-                        "{dim:>4}²: drapekit {backend} / Warp CPU = {:.2}×",
+                        "{dim:>4}²: drapekit {backend} / Warp {warp_on} = {:.2}×",
                         d.particle_substeps_per_s() / w.particle_substeps_per_s()
                     );
                 }

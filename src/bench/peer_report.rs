@@ -50,6 +50,23 @@ fn find<'a>(
     })
 }
 
+/// Warp's row at `grid` under `integrator`, on whichever device it ran (one per run).
+fn find_warp<'a>(rows: &'a [PeerRow], grid: u32, integrator: &str) -> Option<&'a PeerRow> {
+    find(rows, grid, "warp", "cpu", integrator)
+        .or_else(|| find(rows, grid, "warp", "gpu", integrator))
+}
+
+/// Where the peers ran, from their rows' devices, e.g. "WpIntegrator on Warp's cuda:0 (…)".
+fn peer_devices(rows: &[PeerRow]) -> String {
+    let mut devices: Vec<&str> = Vec::new();
+    for r in rows.iter().filter(|r| r.system != "drapekit") {
+        if !devices.contains(&r.device.as_str()) {
+            devices.push(&r.device);
+        }
+    }
+    devices.join("; ")
+}
+
 fn rate(r: Option<&PeerRow>) -> String {
     r.map(|r| format!("{:.3e}", r.particle_substeps_per_s()))
         .unwrap_or_else(|| "–".into())
@@ -104,12 +121,15 @@ fn target_line(rows: &[PeerRow]) -> String {
 fn markdown(opts: &PeerOptions, report: &PeerReport) -> String {
     let mut md = String::from("# drapekit beside NVIDIA Warp and Newton\n\n");
     let _ = writeln!(md, "Command: `{}`\n", opts.command);
-    let _ = writeln!(
-        md,
-        "- Machine: {} (drapekit's CPU path). Warp's CPU device, under Warp and Newton, runs \
-         each kernel's threads one after another on one core.",
-        report.machine
-    );
+    let _ = writeln!(md, "- Machine: {} (drapekit's CPU path).", report.machine);
+    if report.rows.iter().any(|r| r.system != "drapekit") {
+        let _ = writeln!(
+            md,
+            "- Peers' devices: {}. Warp's CPU device, under Warp and Newton, runs each \
+             kernel's threads one after another on one core.",
+            peer_devices(&report.rows)
+        );
+    }
     let _ = writeln!(
         md,
         "- Adapter (drapekit's GPU path): {}",
@@ -152,12 +172,12 @@ fn markdown(opts: &PeerOptions, report: &PeerReport) -> String {
          particle-substeps/s. \"Distance\" is the largest distance between drapekit's CPU \
          state and Warp's after the same frames: a check that the cloth and the integrator \
          are the same (float rounding differs: Warp multiplies by 1/l, drapekit divides by l).\n\n\
-         | grid | particles | springs | Warp CPU | drapekit CPU | drapekit GPU | CPU ÷ Warp | GPU ÷ Warp | distance |\n\
+         | grid | particles | springs | Warp | drapekit CPU | drapekit GPU | CPU ÷ Warp | GPU ÷ Warp | distance |\n\
          |---|---|---|---|---|---|---|---|---|\n",
     );
     let sym = "symplectic";
     for &g in &opts.sizes {
-        let warp = find(&report.rows, g, "warp", "cpu", sym);
+        let warp = find_warp(&report.rows, g, sym);
         let cpu = find(&report.rows, g, "drapekit", "cpu", sym);
         let gpu = find(&report.rows, g, "drapekit", "gpu", sym);
         let Some(any) = warp.or(cpu).or(gpu) else {
@@ -189,7 +209,7 @@ fn markdown(opts: &PeerOptions, report: &PeerReport) -> String {
             md,
             "\n## Newton on the same cloth\n\n\
              Newton's `SolverSemiImplicit` (16 substeps per frame) and `SolverVBD` ({} substeps \
-             per frame, {} iterations) on the CPU, without particle grid or triangle contacts \
+             per frame, {} iterations) on the peers' device, without particle grid or triangle contacts \
              (the cloth has springs only), replayed from a captured graph as Newton's examples \
              do; drapekit's symplectic and implicit Euler at the same settings. Equal \
              stiffness: every system runs the same springs. \"Distance\" is from Warp's \

@@ -89,12 +89,35 @@ pub struct PeerRecord {
     pub median_frame_seconds: f64,
     /// Little-endian f32 xyz positions after the last frame.
     pub state: PathBuf,
+    /// Warp's device the point ran on ("cpu", "cuda:0").
+    #[serde(default)]
+    pub device: Option<String>,
+    /// That device's name as Warp reports it (the GPU's name for CUDA).
+    #[serde(default)]
+    pub device_name: Option<String>,
 }
 
 impl PeerRecord {
     /// Substeps per frame this point ran.
     pub fn substeps_per_frame(&self) -> u32 {
         self.substeps.unwrap_or(self.benchmark_substeps)
+    }
+
+    /// Whether the point ran on a CUDA device.
+    pub fn on_cuda(&self) -> bool {
+        self.device
+            .as_deref()
+            .is_some_and(|d| d.starts_with("cuda"))
+    }
+
+    /// The device in words, e.g. "Warp's cuda:0 (NVIDIA H100 80GB HBM3)".
+    pub fn device_description(&self) -> String {
+        match (&self.device, &self.device_name) {
+            (Some(d), _) if d == "cpu" => "Warp's CPU device".into(),
+            (Some(d), Some(n)) if n != d => format!("Warp's {d} ({n})"),
+            (Some(d), _) => format!("Warp's {d}"),
+            _ => "Warp's CPU device".into(),
+        }
     }
 }
 
@@ -183,6 +206,36 @@ fn pinned_installed(v: &Versions) -> bool {
     Some(v.warp.as_str()) == want("warp-lang")
         && Some(v.newton.as_str()) == want("newton")
         && Some(v.numpy.as_str()) == want("numpy")
+}
+
+/// Uses `python` as it is, with the warp and newton it imports (e.g. from PYTHONPATH, on a
+/// machine without the network), whatever their versions: the report records them. The driver
+/// is written into `dir`.
+pub fn use_python(python: &str, dir: &Path) -> Result<PythonEnv, Error> {
+    check_python(python)?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let driver = dir.join(DRIVER_NAME);
+    write_atomic(&driver, DRIVER.as_bytes())?;
+    let found = versions(Path::new(python), &driver)?;
+    if found.warp.starts_with("missing") || found.newton.starts_with("missing") {
+        return Err(setup_error(
+            Path::new(python),
+            format!(
+                "--no-venv: {python} cannot import warp and newton (warp {}, newton {})",
+                found.warp, found.newton
+            ),
+            format!(
+                "install them for that Python or put them on PYTHONPATH, or leave out \
+                 --no-venv to create the pinned environment ({})",
+                pip_command(Path::new(python))
+            ),
+        ));
+    }
+    Ok(PythonEnv {
+        venv: dir.to_path_buf(),
+        python: PathBuf::from(python),
+        versions: found,
+    })
 }
 
 /// Creates (on first use) the environment in `venv` with `python`, installs the pinned
@@ -318,4 +371,34 @@ pub fn run_driver(env: &PythonEnv, args: &[String]) -> Result<Vec<PeerRecord>, E
             })
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PeerRecord;
+
+    fn record(device: &str) -> PeerRecord {
+        let json = format!(
+            r#"{{"system": "newton", "integrator": "implicit", "solver": "SolverVBD", "grid": 8,
+            "particles": 64, "springs": 306, "rest_length_sum": 1.0, "pinned": 2, "mass": 0.1,
+            "spacing": 0.1, "stiffness": [1000.0], "damping": [10.0], "fps": 60.0,
+            "benchmark_substeps": 16, "substeps": 10, "iterations": 10, "frames": 2,
+            "median_frame_seconds": 0.01, "state": "s.f32"{device}}}"#
+        );
+        serde_json::from_str(&json).unwrap()
+    }
+
+    #[test]
+    fn a_record_names_its_device_and_whether_it_is_cuda() {
+        let cuda = record(r#", "device": "cuda:0", "device_name": "NVIDIA H200""#);
+        assert!(cuda.on_cuda());
+        assert_eq!(cuda.device_description(), "Warp's cuda:0 (NVIDIA H200)");
+        let cpu = record(r#", "device": "cpu", "device_name": "cpu""#);
+        assert!(!cpu.on_cuda());
+        assert_eq!(cpu.device_description(), "Warp's CPU device");
+        // A driver from before the device field ran on the CPU.
+        let old = record("");
+        assert!(!old.on_cuda());
+        assert_eq!(old.device_description(), "Warp's CPU device");
+    }
 }

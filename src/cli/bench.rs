@@ -43,11 +43,12 @@ pub struct BenchCli {
 /// The benchmark subcommands.
 #[derive(Subcommand)]
 enum BenchCommand {
-    /// drapekit beside NVIDIA Warp's own cloth benchmark and Newton's cloth solvers (CPU), on
-    /// Warp's benchmark cloth, in one run; writes peer.csv and peer.md.
+    /// drapekit beside NVIDIA Warp's own cloth benchmark and Newton's cloth solvers (on CUDA
+    /// when Warp finds it, else the CPU), on Warp's benchmark cloth, in one run; writes peer.csv and peer.md.
     #[command(
         after_help = "The peers run from a Python environment (default target/peer-venv) \
-        that the first run creates with pinned warp-lang and newton.\n\n\
+        that the first run creates with pinned warp-lang and newton (--no-venv: the Python's \
+        own). They run on Warp's first CUDA device when there is one (--peer-device).\n\n\
         Examples:\n  \
         drapekit bench peer --sizes 64,128,256 --out out/peer\n  \
         drapekit bench peer --quick --out out/peer-quick\n  \
@@ -273,6 +274,15 @@ struct PeerArgs {
     /// The Python environment's folder (created on first use).
     #[arg(long, default_value = "target/peer-venv")]
     venv: PathBuf,
+    /// Run the peers with --python itself, with the warp and newton it imports (any version,
+    /// recorded in the report; e.g. from PYTHONPATH on a machine without the network); --venv
+    /// then only holds the driver script.
+    #[arg(long)]
+    no_venv: bool,
+    /// Warp's device for Warp and Newton: auto (the first CUDA device when Warp finds one,
+    /// else the CPU), cpu or cuda.
+    #[arg(long, default_value = "auto", value_parser = ["auto", "cpu", "cuda"])]
+    peer_device: String,
 }
 
 /// Runs `drapekit bench …`.
@@ -392,6 +402,8 @@ fn run_peer(p: PeerArgs) -> Result<(), Error> {
         adapter: p.adapter,
         python: p.python,
         venv: p.venv,
+        no_venv: p.no_venv,
+        peer_device: p.peer_device,
         command,
     })
     .map(|_| ())

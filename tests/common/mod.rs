@@ -1,4 +1,5 @@
-//! Shared test helpers: one fallback-adapter device per test binary, and seeded states.
+//! Shared test helpers: one device per test binary (the fallback adapter, or the one
+//! `DRAPEKIT_TEST_ADAPTER` names), the repository's fixtures, and seeded states.
 #![allow(dead_code)] // each test binary uses a different subset
 
 use drapekit::gpu::{AdapterChoice, GpuContext};
@@ -6,8 +7,26 @@ use drapekit::solver::ParticleState;
 use glam::Vec4;
 use std::sync::OnceLock;
 
-/// The fallback (software) adapter's device, shared by every test in this binary because
-/// creating a device per test is slow on lavapipe and can exhaust threads.
+/// The adapter the GPU tests run on: `DRAPEKIT_TEST_ADAPTER=auto` (wgpu's high-performance
+/// adapter, or `WGPU_ADAPTER_NAME`'s), `=<part of an adapter name>`, or unset (or `fallback`):
+/// wgpu's fallback (software) adapter, e.g. Mesa lavapipe.
+pub fn test_adapter() -> AdapterChoice {
+    match std::env::var("DRAPEKIT_TEST_ADAPTER") {
+        Ok(name) if !name.trim().is_empty() => name.trim().parse().unwrap(),
+        _ => AdapterChoice::Fallback,
+    }
+}
+
+/// Whether the tests run on the fallback adapter. Bounds that are exact there (lavapipe rounds
+/// as the CPU twin does, without contracting a·b + c into an FMA) stay exact there; on any
+/// other adapter the tests use bounds derived from what WGSL allows (FMA contraction, 2.5 ULP
+/// for division and `inverseSqrt`), stated at each assertion.
+pub fn on_fallback() -> bool {
+    test_adapter() == AdapterChoice::Fallback
+}
+
+/// The test adapter's device, shared by every test in this binary because creating a device
+/// per test is slow on lavapipe and can exhaust threads.
 /// Returns `None` (and says so) without an adapter; under `CI=true` that is a failure.
 pub fn gpu() -> Option<&'static GpuContext> {
     static CTX: OnceLock<Result<GpuContext, String>> = OnceLock::new();
@@ -16,7 +35,11 @@ pub fn gpu() -> Option<&'static GpuContext> {
             // Silences the Vulkan loader's harmless XDG_RUNTIME_DIR warnings.
             std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir());
         }
-        GpuContext::new(&AdapterChoice::Fallback).map_err(|e| e.to_string())
+        let ctx = GpuContext::new(&test_adapter()).map_err(|e| e.to_string());
+        if let Ok(ctx) = &ctx {
+            eprintln!("GPU tests on {}", ctx.report().describe());
+        }
+        ctx
     });
     match ctx {
         Ok(ctx) => Some(ctx),
@@ -26,8 +49,10 @@ pub fn gpu() -> Option<&'static GpuContext> {
                 .unwrap_or(false);
             assert!(
                 !ci,
-                "CI=true but no fallback GPU adapter: {e}\n\
-                 install Mesa lavapipe: apt-get install -y mesa-vulkan-drivers libvulkan1"
+                "CI=true but no GPU adapter ({}): {e}\n\
+                 install Mesa lavapipe (apt-get install -y mesa-vulkan-drivers libvulkan1), \
+                 or check DRAPEKIT_TEST_ADAPTER against `drapekit info`",
+                test_adapter()
             );
             eprintln!("SKIPPED (no GPU adapter, not under CI): {e}");
             None
@@ -97,11 +122,26 @@ pub fn max_norm(a: &[Vec4]) -> f32 {
     a.iter().map(|v| v.truncate().length()).fold(0.0, f32::max)
 }
 
+/// The repository root whose fixtures/ the tests read: `DRAPEKIT_REPO` if set, else the
+/// current directory when it holds fixtures/ (a compiled test binary run from a copy of the
+/// repository on another machine), else `CARGO_MANIFEST_DIR` (at run time, then as compiled).
+pub fn repo_root() -> std::path::PathBuf {
+    if let Some(dir) = std::env::var_os("DRAPEKIT_REPO") {
+        return dir.into();
+    }
+    if let Ok(cwd) = std::env::current_dir() {
+        if cwd.join("fixtures").join("scenes").is_dir() {
+            return cwd;
+        }
+    }
+    std::env::var_os("CARGO_MANIFEST_DIR")
+        .map(Into::into)
+        .unwrap_or_else(|| env!("CARGO_MANIFEST_DIR").into())
+}
+
 /// Path of a shipped fixture.
 pub fn fixture(rel: &str) -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(rel)
+    repo_root().join("fixtures").join(rel)
 }
 
 /// A 1 m × 0.6 m sheet in the xy plane at z = 0, 20 × 12 quads.
