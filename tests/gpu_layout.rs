@@ -4,17 +4,17 @@
 mod common;
 
 use common::fixture;
-use drapekit::gpu::{AdapterChoice, ArrayLayout, GpuContext, GpuSolver};
+use drapekit::gpu::{ArrayLayout, GpuContext, GpuSolver};
 use drapekit::plan::{HingeEvaluation, Pass};
 use drapekit::scene::Scene;
 use drapekit::sim::{prepare, simulate, RunStats};
 use drapekit::solver::{ParticleState, Solver};
 use std::collections::BTreeSet;
 
-/// A device on the fallback adapter with `layout`; `None` (said) without an adapter, which
-/// under `CI=true` is a failure.
+/// A device on the test adapter (`DRAPEKIT_TEST_ADAPTER`, else the fallback adapter) with
+/// `layout`; `None` (said) without an adapter, which under `CI=true` is a failure.
 fn device(layout: ArrayLayout) -> Option<GpuContext> {
-    match GpuContext::open(&AdapterChoice::Fallback, Some(layout)) {
+    match GpuContext::open(&common::test_adapter(), Some(layout)) {
         Ok(ctx) => Some(ctx),
         Err(e) => {
             let ci = std::env::var("CI").is_ok_and(|v| v == "true" || v == "1");
@@ -100,8 +100,10 @@ fn textures_and_buffers_give_the_same_bits_for_every_stage() {
         let (b, _) = run(&buffers, &scene, frames, hinges);
         covered.extend(passes.iter().map(|p| p.name()));
         // Same kernels, same arithmetic, same inputs: only where the bytes live differs, and
-        // lavapipe compiles both to the same floating-point operations. Any difference is a
-        // wrong index or a lost component in the rewrite, so the comparison is exact.
+        // the compiler sees the same expressions once the loads are done (lavapipe, and the
+        // NVIDIA H200's Vulkan driver, compile both to the same floating-point operations).
+        // Any difference is a wrong index or a lost component in the rewrite, so the
+        // comparison is exact.
         for (f, (a, b)) in a.iter().zip(&b).enumerate() {
             assert!(
                 a.positions == b.positions && a.velocities == b.velocities,
