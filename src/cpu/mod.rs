@@ -14,6 +14,7 @@ mod collide_body;
 mod contact_planes;
 mod deformed_body;
 mod force_residual;
+mod grain;
 mod hash_clear;
 mod hash_count;
 mod hash_fill;
