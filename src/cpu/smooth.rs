@@ -74,3 +74,76 @@ pub fn level_residual(
             *out = sum.extend(0.0);
         });
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A chain of `n` particles, each coupled to its two neighbours: rows alternate between two
+    /// colours, and the blocks are diagonally dominant with varied entries.
+    fn chain(n: usize) -> (BlockPattern, Vec<Mat3>, Vec<Vec4>) {
+        let (mut offsets, mut columns, mut blocks) = (vec![0u32], Vec::new(), Vec::new());
+        let wobble = |k: usize| ((k * 7919) % 101) as f32 / 101.0;
+        for i in 0..n {
+            columns.push(i as u32);
+            blocks.push(Mat3::from_diagonal(Vec3::splat(4.0 + wobble(i))));
+            for j in [i.wrapping_sub(1), i + 1] {
+                if j < n {
+                    columns.push(j as u32);
+                    blocks.push(Mat3::from_cols_array(&[-0.5 - 0.1 * wobble(i + j); 9]));
+                }
+            }
+            offsets.push(columns.len() as u32);
+        }
+        let rhs = (0..n)
+            .map(|i| Vec4::new(wobble(i), -wobble(i + 1), 1.0, 0.0))
+            .collect();
+        (BlockPattern { offsets, columns }, blocks, rhs)
+    }
+
+    #[test]
+    fn a_split_colour_updates_as_one_row_after_another_on_any_thread_count() {
+        // Colours long enough that the sweep splits them (the path that a fine level of a
+        // large garment takes); the reference updates row after row in place.
+        let n = 4 * grain::ROW + 1;
+        assert!(grain::splits(n / 2, grain::ROW));
+        let (pattern, blocks, rhs) = chain(n);
+        let colours: Vec<Vec<u32>> = (0..2).map(|c| (c..n as u32).step_by(2).collect()).collect();
+        let mut reference = vec![Vec4::ZERO; n];
+        for _ in 0..2 {
+            for rows in &colours {
+                for &r in rows {
+                    let r = r as usize;
+                    let (start, end) =
+                        (pattern.offsets[r] as usize, pattern.offsets[r + 1] as usize);
+                    let mut sum = rhs[r].truncate();
+                    for b in start + 1..end {
+                        sum -= blocks[b] * reference[pattern.columns[b] as usize].truncate();
+                    }
+                    reference[r] = solve3(blocks[start], sum).extend(0.0);
+                }
+            }
+        }
+        for threads in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let (mut e, mut next) = (vec![Vec4::ZERO; n], Vec::new());
+            pool.install(|| {
+                for _ in 0..2 {
+                    for rows in &colours {
+                        smooth(&pattern, &blocks, rows, &rhs, &mut e, &mut next);
+                    }
+                }
+            });
+            let bits = |v: &[Vec4]| -> Vec<u32> {
+                v.iter()
+                    .flat_map(|x| x.to_array())
+                    .map(f32::to_bits)
+                    .collect()
+            };
+            assert_eq!(bits(&e), bits(&reference), "{threads} threads");
+        }
+    }
+}
