@@ -15,7 +15,7 @@ mod collide_body;
 mod contact_planes;
 mod deformed_body;
 mod force_residual;
-mod grain;
+pub mod grain;
 mod hash_clear;
 mod hash_count;
 mod hash_fill;
