@@ -5,8 +5,8 @@
 
 mod common;
 
-use drapekit::cpu::CpuSolver;
-use drapekit::scene::Scene;
+use drapekit::cpu::{grain, CpuSolver};
+use drapekit::scene::{ClothSource, Scene};
 use drapekit::sim::{prepare, simulate, RunStats};
 use drapekit::solver::Solver;
 
@@ -73,6 +73,24 @@ fn implicit_cotton_tshirt_is_thread_count_independent() {
     let stats = same_on_any_thread_count("tshirt_drape_cotton", 10, |_| {});
     assert!(stats.max_residual.is_some(), "the implicit solve ran");
     assert!(!stats.seam_gaps.is_empty(), "the shirt has seams");
+}
+
+#[test]
+fn implicit_multigrid_past_every_grain_is_thread_count_independent() {
+    // The T-shirt's 2,468 particles split its vertex loops and block rows into tasks but not
+    // the element-wise vector updates (`vbd_init`, conjugate gradients' updates and dot
+    // products): a 120 × 120 sheet does.
+    let (columns, rows) = (120, 120);
+    assert!(grain::splits(columns * rows, grain::ARRAY));
+    let stats = same_on_any_thread_count("hanging_sheet_cotton", 1, |s| match &mut s.cloth {
+        ClothSource::Grid {
+            columns: c,
+            rows: r,
+            ..
+        } => (*c, *r) = (columns as u32, rows as u32),
+        other => panic!("the fixture is a grid, not {other:?}"),
+    });
+    assert!(stats.max_residual.is_some(), "the implicit solve ran");
 }
 
 #[test]

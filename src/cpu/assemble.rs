@@ -1,5 +1,6 @@
 //! CPU twin of `kernels/assemble.wgsl`.
 
+use super::grain;
 use super::implicit_terms::{Implicit, CONTACT_RATIO};
 use crate::model::multigrid::{BlockPattern, ElementBlocks};
 use glam::{Mat3, Vec4};
@@ -25,10 +26,12 @@ pub fn assemble(
     // Each vertex's filter, once: every neighbour's row needs it.
     let filters: Vec<Mat3> = (0..n)
         .into_par_iter()
+        .with_min_len(grain::ROW)
         .map(|i| s.contact_filter(i, d))
         .collect();
     let rows: Vec<&mut [Mat3]> = split_rows(blocks, &pattern.offsets);
     (force[..n].par_iter_mut().zip(rows))
+        .with_min_len(grain::VERTEX)
         .enumerate()
         .for_each(|(i, (f, row))| {
             row.fill(Mat3::ZERO);

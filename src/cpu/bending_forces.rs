@@ -1,6 +1,7 @@
 //! CPU twin of `kernels/bending_forces.wgsl`: bending with each hinge evaluated from each of its
 //! four vertices (the way lavapipe runs faster; `hinge_forces` is the CPU's own way).
 
+use super::grain;
 use super::hinge_forces::hinge_force;
 use crate::model::layout::{Hinge, SimParams};
 use glam::{Vec3, Vec4};
@@ -19,6 +20,7 @@ pub fn bending_forces(
     let n = params.num_particles as usize;
     force[..n]
         .par_iter_mut()
+        .with_min_len(grain::VERTEX)
         .enumerate()
         .for_each(|(i, force)| {
             let mut f = Vec3::ZERO;

@@ -2,6 +2,7 @@
 //! queries (the CPU collision strategies).
 
 use super::deformed_body::deformed_sample;
+use super::grain;
 use crate::body::sdf::sdf_sample;
 use crate::model::layout::{BodyParams, BodyPose, SimParams, SubstepParams};
 use glam::{Vec3, Vec4};
@@ -130,7 +131,7 @@ pub fn collide_body(
 ) {
     let n = params.num_particles as usize;
     let state = (&mut pos[..n], &mut vel[..n]);
-    state.into_par_iter().for_each(|(pos, vel)| {
+    (state.into_par_iter().with_min_len(grain::VERTEX)).for_each(|(pos, vel)| {
         if pos.w == 0.0 {
             return;
         }

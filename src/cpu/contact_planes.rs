@@ -2,6 +2,7 @@
 
 use super::collide_body::{body_velocity_at, sample_body_sdf, to_body_frame, to_world};
 use super::deformed_body::deformed_sample;
+use super::grain;
 use super::implicit_terms::{Implicit, CONTACT_SLACK_FRACTION};
 use crate::model::layout::SimParams;
 use glam::{Vec3, Vec4};
@@ -41,6 +42,7 @@ pub fn contact_planes(
     type PerBody = [Vec4; crate::model::layout::MAX_BODIES];
     let results: Vec<(PerBody, PerBody, Vec4)> = (0..n)
         .into_par_iter()
+        .with_min_len(grain::VERTEX)
         .map(|i| {
             let mut out = [Vec4::ZERO; crate::model::layout::MAX_BODIES];
             let mut surface = [Vec4::ZERO; crate::model::layout::MAX_BODIES];

@@ -1,5 +1,6 @@
 //! CPU twin of `kernels/force_residual.wgsl`.
 
+use super::grain;
 use super::implicit_terms::Implicit;
 use super::line_energy::tree_sum;
 use crate::model::layout::WORKGROUP_SIZE;
@@ -24,7 +25,11 @@ pub fn force_residual(s: &Implicit, d: &[Vec4], partials: &mut [Vec4]) {
     let n = s.params.num_particles as usize;
     let g = residual_gravity(s.params.gravity);
     let group = WORKGROUP_SIZE as usize;
-    partials.par_iter_mut().enumerate().for_each(|(b, out)| {
+    (partials
+        .par_iter_mut()
+        .with_min_len(grain::blocks(grain::VERTEX)))
+    .enumerate()
+    .for_each(|(b, out)| {
         let mut sums = [Vec4::ZERO; WORKGROUP_SIZE as usize];
         let mut largest = 0.0f32;
         for (k, lane) in sums.iter_mut().enumerate() {

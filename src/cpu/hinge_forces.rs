@@ -1,5 +1,6 @@
 //! CPU twin of `kernels/hinge_forces.wgsl`, and the hinge geometry that `vbd_solve` shares.
 
+use super::grain;
 use crate::model::layout::Hinge;
 use glam::{Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
@@ -100,6 +101,7 @@ pub fn hinge_forces(pos: &[Vec4], hinges: &[Hinge], forces: &mut [Vec4]) {
     forces
         .par_chunks_mut(4)
         .zip(hinges)
+        .with_min_len(grain::ROW)
         .for_each(|(out, h)| match hinge_frame(pos, h) {
             Some(t) => {
                 let c = t.weight * (t.sin_half - h.rest_sin_half);

@@ -111,6 +111,8 @@ pub struct Newton {
     pub scalars: PcgScalars,
     /// The line search's energy partials.
     pub energy: Vec<Vec4>,
+    /// A smoothing sweep's scratch: the colour's next corrections (`smooth`).
+    next: Vec<glam::Vec3>,
     /// The step length of each Newton step of the last substep.
     pub alphas: Vec<f32>,
 }
@@ -136,6 +138,8 @@ pub struct Vbd {
     pub lambdas: Vec<Vec4>,
     /// Newton's method's arrays, with coarse levels.
     pub newton: Option<Newton>,
+    /// A sweep's scratch: the colour's next displacements (`vbd_solve`).
+    next: Vec<Option<(Vec4, f32)>>,
     /// The force residual's partials.
     pub residual_partials: Vec<Vec4>,
     /// The last measured force residual: largest and RMS |f|/(m·g).
@@ -181,6 +185,7 @@ impl Vbd {
                 ap: vec![Vec4::ZERO; n],
                 scalars: PcgScalars::default(),
                 energy: vec![Vec4::ZERO; groups],
+                next: Vec::new(),
                 alphas: Vec::new(),
                 structure,
             }
@@ -196,6 +201,7 @@ impl Vbd {
             planes: vec![Vec4::ZERO; PLANE_BLOCKS * n * (params.num_bodies as usize).max(1)],
             lambdas: vec![Vec4::ZERO; n],
             newton,
+            next: Vec::new(),
             residual_partials: vec![Vec4::ZERO; groups],
             residual: (0.0, 0.0),
             history: Vec::new(),
@@ -295,7 +301,8 @@ impl Vbd {
                             iteration,
                             ..*colour
                         };
-                        vbd_solve(&s, &sweep, &self.order, &mut self.x, &mut self.steps);
+                        let (x, steps, next) = (&mut self.x, &mut self.steps, &mut self.next);
+                        vbd_solve(&s, &sweep, &self.order, x, steps, next);
                     }
                     self.iterations_run.0 += 1;
                     *swept += 1;
@@ -332,6 +339,14 @@ struct FineColours<'a> {
     colours: &'a [Sweep],
 }
 
+impl FineColours<'_> {
+    /// The particles of colour `k`.
+    fn rows(&self, k: usize) -> &[u32] {
+        let c = &self.colours[k];
+        &self.order[c.first as usize..(c.first + c.count) as usize]
+    }
+}
+
 impl Newton {
     /// One operation of a Newton step.
     fn run(&mut self, op: SolveOp, s: &Implicit, fine: &FineColours, x: &mut [Vec4]) {
@@ -364,23 +379,26 @@ impl Newton {
             }
             SolveOp::Smooth { level: l, backward } => {
                 let a = &mut self.levels[l as usize];
-                let colours: Vec<&[u32]> = if l == 0 {
-                    (fine.colours.iter())
-                        .map(|c| &fine.order[c.first as usize..(c.first + c.count) as usize])
-                        .collect()
+                let count = if l == 0 {
+                    fine.colours.len()
                 } else {
-                    let lv = level(l);
-                    (0..lv.colors())
-                        .map(|k| {
-                            &lv.order
-                                [lv.color_offsets[k] as usize..lv.color_offsets[k + 1] as usize]
-                        })
-                        .collect()
+                    level(l).colors()
                 };
-                let mut run = |rows: &[u32]| smooth(pattern(l), &a.blocks, rows, &a.rhs, &mut a.e);
-                match backward {
-                    false => colours.iter().for_each(|rows| run(rows)),
-                    true => colours.iter().rev().for_each(|rows| run(rows)),
+                for j in 0..count {
+                    let k = if backward { count - 1 - j } else { j };
+                    let rows = if l == 0 {
+                        fine.rows(k)
+                    } else {
+                        level(l).color_rows(k)
+                    };
+                    smooth(
+                        pattern(l),
+                        &a.blocks,
+                        rows,
+                        &a.rhs,
+                        &mut a.e,
+                        &mut self.next,
+                    );
                 }
             }
             SolveOp::BlockJacobi => {

@@ -1,5 +1,6 @@
 //! CPU twin of `kernels/integrate.wgsl`.
 
+use super::grain;
 use crate::model::layout::{SimParams, INTEGRATOR_EXPLICIT};
 use glam::Vec4;
 use rayon::prelude::*;
@@ -33,6 +34,7 @@ pub fn integrate(
     let state = (&mut pos[..n], &mut vel[..n], &mut force[..n]);
     state
         .into_par_iter()
+        .with_min_len(grain::ROW)
         .enumerate()
         .for_each(|(i, (pos, vel, force))| {
             let p = *pos;

@@ -1,5 +1,6 @@
 //! CPU twin of `kernels/line_energy.wgsl`.
 
+use super::grain;
 use super::implicit_terms::Implicit;
 use crate::model::layout::WORKGROUP_SIZE;
 use glam::Vec4;
@@ -14,7 +15,11 @@ pub const LINE_ALPHAS: [f32; 3] = [1.0, 0.5, 0.25];
 pub fn line_energy(s: &Implicit, d: &[Vec4], c: &[Vec4], partials: &mut [Vec4]) {
     let n = s.params.num_particles as usize;
     let group = WORKGROUP_SIZE as usize;
-    partials.par_iter_mut().enumerate().for_each(|(g, out)| {
+    (partials
+        .par_iter_mut()
+        .with_min_len(grain::blocks(grain::VERTEX)))
+    .enumerate()
+    .for_each(|(g, out)| {
         let mut lanes = [Vec4::ZERO; WORKGROUP_SIZE as usize];
         for (k, lane) in lanes.iter_mut().enumerate() {
             let i = g * group + k;
@@ -61,7 +66,7 @@ pub fn apply_correction(alpha: f32, c: &[Vec4], d: &mut [Vec4]) {
     if alpha == 0.0 {
         return;
     }
-    d.par_iter_mut().zip(c).for_each(|(d, c)| {
+    (d.par_iter_mut().zip(c).with_min_len(grain::ARRAY)).for_each(|(d, c)| {
         *d = (d.truncate() + alpha * c.truncate()).extend(d.w);
     });
 }

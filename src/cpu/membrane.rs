@@ -15,6 +15,7 @@
 //! 2011); |w_u| − 1 does not resist compression any differently from stretch (buckling is left
 //! to bending); large shear couples with stretch through w_u·w_v = |w_u||w_v|cos.
 
+use super::grain;
 use crate::model::layout::{Membrane, SimParams};
 use glam::{Mat3, Vec3, Vec4};
 use rayon::prelude::*;
@@ -63,6 +64,7 @@ pub fn membrane_forces(
     let n = params.num_particles as usize;
     force[..n]
         .par_iter_mut()
+        .with_min_len(grain::VERTEX)
         .enumerate()
         .for_each(|(i, force)| {
             let mut f = Vec3::ZERO;

@@ -4,8 +4,9 @@
 //! The per-particle stages are rayon parallel iterators over particles, each particle writing
 //! only its own result from reads of the previous arrays and summing its elements in a fixed
 //! order: no atomics, and the same bits on any number of threads (`tests/threads.rs`). They run
-//! on the caller's rayon pool (`--threads`). The spatial-hash build (a scatter) and the
-//! point–triangle self-collision reference (Gauss–Seidel) stay serial.
+//! on the caller's rayon pool (`--threads`), in tasks of at least a grain of work each
+//! (`grain`), so that a short loop runs on the calling thread. The spatial-hash build (a
+//! scatter) and the point–triangle self-collision reference (Gauss–Seidel) stay serial.
 
 mod assemble;
 mod bending_forces;
@@ -14,6 +15,7 @@ mod collide_body;
 mod contact_planes;
 mod deformed_body;
 mod force_residual;
+pub mod grain;
 mod hash_clear;
 mod hash_count;
 mod hash_fill;

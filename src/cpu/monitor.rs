@@ -1,5 +1,6 @@
 //! CPU twin of `kernels/monitor.wgsl`: the same per-block partials, reduced in the same tree.
 
+use super::grain;
 use crate::model::layout::{SimParams, SpringRef, WORKGROUP_SIZE};
 use crate::solver::HealthPartial;
 use glam::Vec4;
@@ -18,6 +19,7 @@ pub fn monitor(
     let size = WORKGROUP_SIZE as usize;
     (0..n.div_ceil(size).max(1))
         .into_par_iter()
+        .with_min_len(grain::blocks(grain::ROW))
         .map(|group| {
             let mut slots: Vec<HealthPartial> = (0..size)
                 .map(|local| {

@@ -3,6 +3,7 @@
 //! V-cycle. Dot products are summed as the kernels sum them: `tree_sum` within each block of
 //! `WORKGROUP_SIZE` particles, then the blocks in order.
 
+use super::grain;
 use super::line_energy::tree_sum;
 use crate::model::layout::WORKGROUP_SIZE;
 use crate::model::multigrid::BlockPattern;
@@ -23,6 +24,7 @@ pub fn dot(a: &[Vec4], b: &[Vec4]) -> f32 {
     let group = WORKGROUP_SIZE as usize;
     let partials: Vec<f32> = (0..a.len().div_ceil(group))
         .into_par_iter()
+        .with_min_len(grain::blocks(grain::ARRAY))
         .map(|g| {
             let mut lanes = [Vec4::ZERO; WORKGROUP_SIZE as usize];
             for (k, lane) in lanes.iter_mut().enumerate() {
@@ -54,7 +56,7 @@ pub fn pcg_direction(first: bool, r: &[Vec4], z: &[Vec4], p: &mut [Vec4], s: &mu
     let rz = dot(r, z);
     let beta = if first || s.rz == 0.0 { 0.0 } else { rz / s.rz };
     s.rz = rz;
-    p.par_iter_mut().zip(z).for_each(|(p, z)| {
+    (p.par_iter_mut().zip(z).with_min_len(grain::ARRAY)).for_each(|(p, z)| {
         *p = (z.truncate() + beta * p.truncate()).extend(0.0);
     });
 }
@@ -68,14 +70,16 @@ pub fn pcg_matvec(
     ap: &mut [Vec4],
     s: &mut PcgScalars,
 ) {
-    ap.par_iter_mut().enumerate().for_each(|(i, out)| {
-        let (start, end) = (pattern.offsets[i] as usize, pattern.offsets[i + 1] as usize);
-        let mut sum = glam::Vec3::ZERO;
-        for b in start..end {
-            sum += blocks[b] * p[pattern.columns[b] as usize].truncate();
-        }
-        *out = sum.extend(0.0);
-    });
+    (ap.par_iter_mut().with_min_len(grain::ROW))
+        .enumerate()
+        .for_each(|(i, out)| {
+            let (start, end) = (pattern.offsets[i] as usize, pattern.offsets[i + 1] as usize);
+            let mut sum = glam::Vec3::ZERO;
+            for b in start..end {
+                sum += blocks[b] * p[pattern.columns[b] as usize].truncate();
+            }
+            *out = sum.extend(0.0);
+        });
     let pap = dot(p, ap);
     s.alpha = if pap > 0.0 { s.rz / pap } else { 0.0 };
 }
@@ -91,6 +95,7 @@ pub fn pcg_step(
 ) {
     let a = s.alpha;
     (c.par_iter_mut().zip(r.par_iter_mut()).zip(z.par_iter_mut()))
+        .with_min_len(grain::ARRAY)
         .enumerate()
         .for_each(|(i, ((c, r), z))| {
             *c = (c.truncate() + a * p[i].truncate()).extend(0.0);

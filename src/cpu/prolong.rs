@@ -1,14 +1,17 @@
 //! CPU twin of `kernels/prolong.wgsl`.
 
+use super::grain;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 /// Prolongation P between two coarse levels: each finer particle adds the weighted sum of its
 /// three parents' `coarse` corrections to its own. Particles run in parallel.
 pub fn prolong(parents: &[[u32; 3]], weights: &[[f32; 3]], coarse: &[Vec4], finer: &mut [Vec4]) {
-    finer.par_iter_mut().enumerate().for_each(|(i, e)| {
-        *e += blend(parents[i], weights[i], coarse).extend(0.0);
-    });
+    (finer.par_iter_mut().with_min_len(grain::ARRAY))
+        .enumerate()
+        .for_each(|(i, e)| {
+            *e += blend(parents[i], weights[i], coarse).extend(0.0);
+        });
 }
 
 /// The weighted sum of three parents' values.
@@ -27,29 +30,31 @@ pub(super) fn blend(parents: [u32; 3], weights: [f32; 3], coarse: &[Vec4]) -> Ve
 /// sweep's step is. Particles run in parallel.
 pub fn correction_filter(s: &super::implicit_terms::Implicit, d: &[Vec4], c: &mut [Vec4]) {
     let n = s.params.num_particles as usize;
-    c[..n].par_iter_mut().enumerate().for_each(|(i, c)| {
-        if s.prev[i].w == 0.0 {
-            *c = Vec4::ZERO;
-            return;
-        }
-        let mut v = c.truncate();
-        for b in 0..s.params.num_bodies as usize {
-            let plane = s.plane(b, i);
-            let normal = plane.truncate();
-            let phi = plane.w + normal.dot(d[i].truncate());
-            let thickness = s.params.bodies[b].thickness;
-            let inward = v.dot(normal);
-            if s.touching(b, i, d[i].truncate()) {
-                if inward < 0.0 {
-                    v -= inward * normal;
-                }
-            } else {
-                let landing = phi + inward;
-                if landing < thickness {
-                    v += (thickness - landing) * normal;
+    (c[..n].par_iter_mut().with_min_len(grain::ARRAY))
+        .enumerate()
+        .for_each(|(i, c)| {
+            if s.prev[i].w == 0.0 {
+                *c = Vec4::ZERO;
+                return;
+            }
+            let mut v = c.truncate();
+            for b in 0..s.params.num_bodies as usize {
+                let plane = s.plane(b, i);
+                let normal = plane.truncate();
+                let phi = plane.w + normal.dot(d[i].truncate());
+                let thickness = s.params.bodies[b].thickness;
+                let inward = v.dot(normal);
+                if s.touching(b, i, d[i].truncate()) {
+                    if inward < 0.0 {
+                        v -= inward * normal;
+                    }
+                } else {
+                    let landing = phi + inward;
+                    if landing < thickness {
+                        v += (thickness - landing) * normal;
+                    }
                 }
             }
-        }
-        *c = v.extend(0.0);
-    });
+            *c = v.extend(0.0);
+        });
 }

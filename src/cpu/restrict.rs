@@ -1,5 +1,6 @@
 //! CPU twin of `kernels/restrict.wgsl`.
 
+use super::grain;
 use crate::model::Csr;
 use glam::Vec4;
 use rayon::prelude::*;
@@ -14,6 +15,7 @@ pub fn restrict(
     correction: &mut [Vec4],
 ) {
     (coarse.par_iter_mut().zip(correction))
+        .with_min_len(grain::ARRAY)
         .enumerate()
         .for_each(|(c, (out, e))| {
             let (start, end) = (children.offsets[c], children.offsets[c + 1]);

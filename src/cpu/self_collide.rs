@@ -1,5 +1,6 @@
 //! CPU twin of `kernels/self_collide.wgsl`.
 
+use super::grain;
 use super::hash_count::{hash_bucket, hash_cell_of};
 use crate::model::layout::{SimParams, SpringRef};
 use glam::{IVec3, Vec3, Vec4};
@@ -27,6 +28,7 @@ pub fn self_collide(
     let n = params.num_particles as usize;
     let out = (&mut pos_out[..n], &mut vel_out[..n]);
     out.into_par_iter()
+        .with_min_len(grain::VERTEX)
         .enumerate()
         .for_each(|(i, (pos_out, vel_out))| {
             let p = pos[i];

@@ -1,5 +1,6 @@
 //! CPU twins of `kernels/smooth.wgsl` and `kernels/level_residual.wgsl`.
 
+use super::grain;
 use super::vbd_solve::solve3;
 use crate::model::multigrid::BlockPattern;
 use glam::{Mat3, Vec3, Vec4};
@@ -7,9 +8,18 @@ use rayon::prelude::*;
 
 /// One block Gauss–Seidel update of the particles `rows` (one colour) of a level's system
 /// A·e = r: e_I = A_II⁻¹(r_I − Σ_J≠I A_IJ·e_J). Rows of one colour share no block, so they
-/// update at once from the same `e`. A row whose diagonal is singular (a pinned particle, or
-/// a coarse one whose children are all pinned) gets e = 0.
-pub fn smooth(pattern: &BlockPattern, blocks: &[Mat3], rows: &[u32], rhs: &[Vec4], e: &mut [Vec4]) {
+/// update at once from the same `e`: in place on one thread, or, for a colour long enough to
+/// split, computed in parallel into `next` (scratch, kept between calls) and then written. A
+/// row whose diagonal is singular (a pinned particle, or a coarse one whose children are all
+/// pinned) gets e = 0.
+pub fn smooth(
+    pattern: &BlockPattern,
+    blocks: &[Mat3],
+    rows: &[u32],
+    rhs: &[Vec4],
+    e: &mut [Vec4],
+    next: &mut Vec<Vec3>,
+) {
     let update = |e: &[Vec4], r: usize| {
         let (start, end) = (pattern.offsets[r] as usize, pattern.offsets[r + 1] as usize);
         let mut sum = rhs[r].truncate();
@@ -18,7 +28,7 @@ pub fn smooth(pattern: &BlockPattern, blocks: &[Mat3], rows: &[u32], rhs: &[Vec4
         }
         solve3(blocks[start], sum)
     };
-    if rows.len() < PARALLEL_ROWS {
+    if !grain::splits(rows.len(), grain::ROW) {
         // No row reads another of its colour, so updating in place gives the same numbers.
         for &r in rows {
             e[r as usize] = update(e, r as usize).extend(0.0);
@@ -26,27 +36,24 @@ pub fn smooth(pattern: &BlockPattern, blocks: &[Mat3], rows: &[u32], rhs: &[Vec4
         return;
     }
     let now: &[Vec4] = e;
-    let updates: Vec<(usize, Vec3)> = rows
-        .par_iter()
-        .map(|&r| (r as usize, update(now, r as usize)))
-        .collect();
-    for (r, v) in updates {
-        e[r] = v.extend(0.0);
+    (rows.par_iter().with_min_len(grain::ROW))
+        .map(|&r| update(now, r as usize))
+        .collect_into_vec(next);
+    for (&r, v) in rows.iter().zip(next.iter()) {
+        e[r as usize] = v.extend(0.0);
     }
 }
 
 /// Block-Jacobi preconditioning: each row's e = D⁻¹·rhs with D its diagonal block (the first
 /// of the row). Rows run in parallel.
 pub fn block_jacobi(pattern: &BlockPattern, blocks: &[Mat3], rhs: &[Vec4], e: &mut [Vec4]) {
-    e.par_iter_mut().enumerate().for_each(|(r, e)| {
-        let diagonal = blocks[pattern.offsets[r] as usize];
-        *e = solve3(diagonal, rhs[r].truncate()).extend(0.0);
-    });
+    (e.par_iter_mut().with_min_len(grain::ROW))
+        .enumerate()
+        .for_each(|(r, e)| {
+            let diagonal = blocks[pattern.offsets[r] as usize];
+            *e = solve3(diagonal, rhs[r].truncate()).extend(0.0);
+        });
 }
-
-/// Below this many rows a colour is swept on one thread: splitting it costs more than it
-/// saves.
-const PARALLEL_ROWS: usize = 512;
 
 /// The residual r − A·e of a level, row by row in parallel.
 pub fn level_residual(
@@ -56,12 +63,87 @@ pub fn level_residual(
     e: &[Vec4],
     out: &mut [Vec4],
 ) {
-    out.par_iter_mut().enumerate().for_each(|(r, out)| {
-        let (start, end) = (pattern.offsets[r] as usize, pattern.offsets[r + 1] as usize);
-        let mut sum = rhs[r].truncate();
-        for b in start..end {
-            sum -= blocks[b] * e[pattern.columns[b] as usize].truncate();
+    (out.par_iter_mut().with_min_len(grain::ROW))
+        .enumerate()
+        .for_each(|(r, out)| {
+            let (start, end) = (pattern.offsets[r] as usize, pattern.offsets[r + 1] as usize);
+            let mut sum = rhs[r].truncate();
+            for b in start..end {
+                sum -= blocks[b] * e[pattern.columns[b] as usize].truncate();
+            }
+            *out = sum.extend(0.0);
+        });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A chain of `n` particles, each coupled to its two neighbours: rows alternate between two
+    /// colours, and the blocks are diagonally dominant with varied entries.
+    fn chain(n: usize) -> (BlockPattern, Vec<Mat3>, Vec<Vec4>) {
+        let (mut offsets, mut columns, mut blocks) = (vec![0u32], Vec::new(), Vec::new());
+        let wobble = |k: usize| ((k * 7919) % 101) as f32 / 101.0;
+        for i in 0..n {
+            columns.push(i as u32);
+            blocks.push(Mat3::from_diagonal(Vec3::splat(4.0 + wobble(i))));
+            for j in [i.wrapping_sub(1), i + 1] {
+                if j < n {
+                    columns.push(j as u32);
+                    blocks.push(Mat3::from_cols_array(&[-0.5 - 0.1 * wobble(i + j); 9]));
+                }
+            }
+            offsets.push(columns.len() as u32);
         }
-        *out = sum.extend(0.0);
-    });
+        let rhs = (0..n)
+            .map(|i| Vec4::new(wobble(i), -wobble(i + 1), 1.0, 0.0))
+            .collect();
+        (BlockPattern { offsets, columns }, blocks, rhs)
+    }
+
+    #[test]
+    fn a_split_colour_updates_as_one_row_after_another_on_any_thread_count() {
+        // Colours long enough that the sweep splits them (the path that a fine level of a
+        // large garment takes); the reference updates row after row in place.
+        let n = 4 * grain::ROW + 1;
+        assert!(grain::splits(n / 2, grain::ROW));
+        let (pattern, blocks, rhs) = chain(n);
+        let colours: Vec<Vec<u32>> = (0..2).map(|c| (c..n as u32).step_by(2).collect()).collect();
+        let mut reference = vec![Vec4::ZERO; n];
+        for _ in 0..2 {
+            for rows in &colours {
+                for &r in rows {
+                    let r = r as usize;
+                    let (start, end) =
+                        (pattern.offsets[r] as usize, pattern.offsets[r + 1] as usize);
+                    let mut sum = rhs[r].truncate();
+                    for b in start + 1..end {
+                        sum -= blocks[b] * reference[pattern.columns[b] as usize].truncate();
+                    }
+                    reference[r] = solve3(blocks[start], sum).extend(0.0);
+                }
+            }
+        }
+        for threads in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let (mut e, mut next) = (vec![Vec4::ZERO; n], Vec::new());
+            pool.install(|| {
+                for _ in 0..2 {
+                    for rows in &colours {
+                        smooth(&pattern, &blocks, rows, &rhs, &mut e, &mut next);
+                    }
+                }
+            });
+            let bits = |v: &[Vec4]| -> Vec<u32> {
+                v.iter()
+                    .flat_map(|x| x.to_array())
+                    .map(f32::to_bits)
+                    .collect()
+            };
+            assert_eq!(bits(&e), bits(&reference), "{threads} threads");
+        }
+    }
 }

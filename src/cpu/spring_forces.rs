@@ -1,5 +1,6 @@
 //! CPU twin of `kernels/spring_forces.wgsl`.
 
+use super::grain;
 use crate::model::layout::{SimParams, SpringRef};
 use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
@@ -19,6 +20,7 @@ pub fn spring_forces(
     let n = params.num_particles as usize;
     force[..n]
         .par_iter_mut()
+        .with_min_len(grain::VERTEX)
         .enumerate()
         .for_each(|(i, force)| {
             let xi = Vec3A::from_vec4(pos[i]);

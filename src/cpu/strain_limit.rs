@@ -1,5 +1,6 @@
 //! CPU twin of `kernels/strain_limit.wgsl`.
 
+use super::grain;
 use crate::model::layout::{SimParams, SpringRef};
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
@@ -22,6 +23,7 @@ pub fn strain_limit(
     let n = params.num_particles as usize;
     let out = (&mut pos_out[..n], &mut vel_out[..n]);
     out.into_par_iter()
+        .with_min_len(grain::VERTEX)
         .enumerate()
         .for_each(|(i, (pos_out, vel_out))| {
             let p = pos[i];

@@ -1,5 +1,6 @@
 //! CPU twin of `kernels/vbd_finish.wgsl`.
 
+use super::grain;
 use crate::model::layout::SimParams;
 use glam::Vec4;
 use rayon::prelude::*;
@@ -12,6 +13,7 @@ pub fn vbd_finish(params: &SimParams, x: &[Vec4], pos: &mut [Vec4], vel: &mut [V
     let state = (&mut pos[..n], &mut vel[..n]);
     state
         .into_par_iter()
+        .with_min_len(grain::ARRAY)
         .enumerate()
         .for_each(|(i, (pos, vel))| {
             let p = *pos;

@@ -1,5 +1,6 @@
 //! CPU twin of `kernels/vbd_init.wgsl`.
 
+use super::grain;
 use crate::model::layout::SimParams;
 use glam::Vec4;
 use rayon::prelude::*;
@@ -29,6 +30,7 @@ pub fn vbd_init(
     let n = params.num_particles as usize;
     let out = (&mut force[..n], &mut x[..n], &mut y[..n]);
     out.into_par_iter()
+        .with_min_len(grain::ARRAY)
         .enumerate()
         .for_each(|(i, (force, x, y))| {
             let p = pos[i];

@@ -6,6 +6,7 @@
 //! force (−gradient) and H its 3×3 Hessian block, D += H⁻¹f. Vertices of one colour share no
 //! element, so they update at once (one dispatch) without reading each other.
 
+use super::grain;
 use super::implicit_terms::Implicit;
 use crate::model::layout::Sweep;
 use glam::{Mat3, Vec3, Vec4};
@@ -61,15 +62,25 @@ pub fn solve3(hess: Mat3, f: Vec3) -> Vec3 {
 /// sweep's iteration records the largest step length in `steps` (m).
 ///
 /// A vertex's system reads only itself and vertices of other colours, so the colour's steps
-/// are computed in parallel from the same `x` and then written: the same numbers as one
-/// vertex after another, on any number of threads (the largest of them too).
-pub fn vbd_solve(s: &Implicit, sweep: &Sweep, order: &[u32], x: &mut [Vec4], steps: &mut [f32]) {
+/// are computed in parallel from the same `x` into `next` (scratch, one entry per vertex of
+/// the colour: its next displacement and step length, `None` when pinned; kept between calls
+/// so that a sweep allocates nothing) and then written: the same numbers as one vertex after
+/// another, on any number of threads (the largest of them too).
+pub fn vbd_solve(
+    s: &Implicit,
+    sweep: &Sweep,
+    order: &[u32],
+    x: &mut [Vec4],
+    steps: &mut [f32],
+    next: &mut Vec<Option<(Vec4, f32)>>,
+) {
     let iteration = sweep.iteration as usize;
     let colour = &order[sweep.first as usize..(sweep.first + sweep.count) as usize];
     let x_now: &[Vec4] = x;
-    let updates: Vec<(usize, Vec4, f32)> = colour
+    colour
         .par_iter()
-        .filter_map(|&i| {
+        .with_min_len(grain::VERTEX)
+        .map(|&i| {
             let i = i as usize;
             let w = s.prev[i].w;
             if w == 0.0 {
@@ -78,11 +89,13 @@ pub fn vbd_solve(s: &Implicit, sweep: &Sweep, order: &[u32], x: &mut [Vec4], ste
             let sys = s.vertex_system(i, x_now, None, &mut |_, _| {});
             let d = x_now[i].truncate();
             let delta = newton_step(s, i, d, sys.force, sys.hessian);
-            Some((i, (d + delta).extend(w), delta.length()))
+            Some(((d + delta).extend(w), delta.length()))
         })
-        .collect();
-    for (i, next, len) in updates {
-        x[i] = next;
-        steps[iteration] = steps[iteration].max(len);
+        .collect_into_vec(next);
+    for (&i, update) in colour.iter().zip(next.iter()) {
+        if let Some((moved, len)) = *update {
+            x[i as usize] = moved;
+            steps[iteration] = steps[iteration].max(len);
+        }
     }
 }

@@ -1,5 +1,6 @@
 //! CPU twin of `kernels/wind_forces.wgsl`.
 
+use super::grain;
 use crate::model::layout::{SimParams, SubstepParams};
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
@@ -21,6 +22,7 @@ pub fn wind_forces(
     let n = params.num_particles as usize;
     force[..n]
         .par_iter_mut()
+        .with_min_len(grain::VERTEX)
         .enumerate()
         .for_each(|(i, force)| {
             let mut f = Vec3::ZERO;

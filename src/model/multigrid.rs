@@ -121,6 +121,11 @@ impl Level {
     pub fn colors(&self) -> usize {
         self.color_offsets.len() - 1
     }
+
+    /// The particles of colour `k`.
+    pub fn color_rows(&self, k: usize) -> &[u32] {
+        &self.order[self.color_offsets[k] as usize..self.color_offsets[k + 1] as usize]
+    }
 }
 
 /// The fine level's structure and the coarse levels, finest first.

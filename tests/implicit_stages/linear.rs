@@ -100,7 +100,10 @@ pub(crate) fn check_level_op(
             let l = level as usize;
             let colours = colours(mg, fine, l);
             let a = &mut lv[l];
-            let mut run = |rows: &[u32]| cpu::smooth(pattern(l), &a.blocks, rows, &a.rhs, &mut a.e);
+            let mut next = Vec::new();
+            let mut run = |rows: &[u32]| {
+                cpu::smooth(pattern(l), &a.blocks, rows, &a.rhs, &mut a.e, &mut next)
+            };
             match backward {
                 false => colours.iter().for_each(|r| run(r)),
                 true => colours.iter().rev().for_each(|r| run(r)),
@@ -191,9 +194,7 @@ fn colours(mg: &Multigrid, fine: &[Vec<u32>], l: usize) -> Vec<Vec<u32>> {
         return fine.to_vec();
     }
     let c = &mg.levels[l - 1];
-    (0..c.colors())
-        .map(|k| c.order[c.color_offsets[k] as usize..c.color_offsets[k + 1] as usize].to_vec())
-        .collect()
+    (0..c.colors()).map(|k| c.color_rows(k).to_vec()).collect()
 }
 
 /// Conjugate gradients' vectors and scalars on the CPU.

@@ -385,9 +385,9 @@ fn check_sweep(g: &mut GpuSolver, c: &mut Case) {
     // One sweep over every colour (in place on both).
     let coloring = c.prep.model.vertex_coloring();
     let mut x = c.x.clone();
-    let mut steps = [0.0f32];
+    let (mut steps, mut next) = ([0.0f32], Vec::new());
     for sweep in coloring.sweeps(1) {
-        c.with(|s| cpu::vbd_solve(s, &sweep, &coloring.order, &mut x, &mut steps));
+        c.with(|s| cpu::vbd_solve(s, &sweep, &coloring.order, &mut x, &mut steps, &mut next));
     }
     g.run_solve_ops(&[SolveOp::Sweep { iteration: 0 }], &c.step)
         .unwrap();
