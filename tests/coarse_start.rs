@@ -73,8 +73,8 @@ fn coarse_started_shirt(dir: &Path) -> PathBuf {
             "particle_distance_m = 0.02\n",
             "particle_distance_m = 0.02\ncoarse_start_distance_m = 0.04\n",
         )
-        // From the 4 cm start (settled at frame 131) the 2 cm mesh settled at frame 239 on the
-        // CPU: 15 s leave room for the GPU's slightly different rounding.
+        // From the 4 cm start (settled near frame 30) the 2 cm mesh settles near frame 55 on
+        // the CPU: 15 s leave ample room for the GPU's slightly different rounding.
         .replace("frames = 240\n", "frames = 360\n");
     assert!(
         text.contains("coarse_start_distance_m") && text.contains("frames = 360"),
@@ -162,9 +162,10 @@ fn a_coarse_started_shirt_settles_sewn_and_unstretched_on_the_gpu() {
 
 #[test]
 fn a_resumed_coarse_started_run_repeats_the_uninterrupted_one() {
-    // Stopped at frame 180 (the coarse start ends at 131), then resumed from the checkpoint:
-    // the full mesh continues from it without redoing the coarse start, and the CPU path gives
-    // the same bits as the run that was never stopped.
+    // Stopped halfway between the end of the coarse start and the frame where the whole run
+    // settled, then resumed from the checkpoint: the full mesh continues from it without
+    // redoing the coarse start, and the CPU path gives the same bits as the run that was never
+    // stopped.
     let whole = common::out_dir("coarse_start", "whole");
     let parts = common::out_dir("coarse_start", "parts");
     let scene = coarse_started_shirt(&whole.with_extension("scene"));
@@ -174,6 +175,9 @@ fn a_resumed_coarse_started_run_repeats_the_uninterrupted_one() {
         assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
         String::from_utf8_lossy(&r.stdout).to_string()
     };
+    let summary = |dir: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+    };
     run(&[
         "run",
         scene,
@@ -182,25 +186,31 @@ fn a_resumed_coarse_started_run_repeats_the_uninterrupted_one() {
         "--out",
         whole.to_str().unwrap(),
     ]);
+    let frame = |v: &serde_json::Value| v.as_u64().expect("a frame number");
+    let whole_summary = summary(&whole);
+    let coarse_end = frame(&whole_summary["coarse_start"]["frame"]);
+    let settled = frame(&whole_summary["settled"]["frame"]);
+    assert!(
+        settled >= coarse_end + 4,
+        "the full mesh ran only {coarse_end}..{settled}: nothing to stop in between"
+    );
+    let stop = ((coarse_end + settled) / 2).to_string();
     let first = run(&[
         "run",
         scene,
         "--backend",
         "cpu",
         "--frames",
-        "180",
+        &stop,
         "--checkpoint-every",
-        "30",
+        "1",
         "--out",
         parts.to_str().unwrap(),
     ]);
     assert!(first.contains("coarse start"), "{first}");
     let resumed = run(&["resume", parts.to_str().unwrap(), "--frames", "360"]);
     assert!(resumed.contains("coarse start"), "{resumed}");
-    let summary = |dir: &Path| -> serde_json::Value {
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
-    };
-    let (a, b) = (summary(&whole), summary(&parts));
+    let (a, b) = (whole_summary, summary(&parts));
     for key in [
         "settled",
         "frames",
