@@ -5,6 +5,7 @@
 
 use super::grain;
 use super::line_energy::tree_sum;
+use super::smooth::block_times;
 use crate::model::layout::WORKGROUP_SIZE;
 use crate::model::multigrid::BlockPattern;
 use glam::{Mat3, Vec4};
@@ -74,9 +75,9 @@ pub fn pcg_matvec(
         .enumerate()
         .for_each(|(i, out)| {
             let (start, end) = (pattern.offsets[i] as usize, pattern.offsets[i + 1] as usize);
-            let mut sum = glam::Vec3::ZERO;
+            let mut sum = glam::Vec3A::ZERO;
             for b in start..end {
-                sum += blocks[b] * p[pattern.columns[b] as usize].truncate();
+                sum += block_times(blocks[b], p[pattern.columns[b] as usize]);
             }
             *out = sum.extend(0.0);
         });
