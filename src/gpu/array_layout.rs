@@ -10,8 +10,8 @@
 //! accesses of those arrays before the shader is compiled. Nothing else differs: the same
 //! arithmetic runs on the same values.
 //!
-//! The body's signed distance field stays a texture in both layouts: its helpers take the grid
-//! as a function argument, which WGSL allows for textures and not for storage arrays.
+//! An array whose kernels need it as a texture says so where the arrays are listed
+//! (`Elements::layout`): the body's signed distance field stays a texture in both layouts.
 
 use super::pipelines::Binding;
 
@@ -23,9 +23,6 @@ pub enum ArrayLayout {
     /// Storage buffers (what GPUs read fastest; measured in the book's hardware chapter).
     Buffers,
 }
-
-/// Arrays that stay textures whatever the layout (see the module documentation).
-const TEXTURE_ONLY: &[&str] = &["sdf"];
 
 /// Storage buffers per shader stage the buffer layout asks of a device: the most texel arrays
 /// and solve buffers one kernel binds (contact_planes: 18 bindings) with room to spare.
@@ -60,14 +57,6 @@ impl ArrayLayout {
                 info.name
             )),
             layout => Ok(layout),
-        }
-    }
-
-    /// The layout of the array called `label`.
-    pub fn for_array(self, label: &str) -> Self {
-        match TEXTURE_ONLY.contains(&label) {
-            true => ArrayLayout::Textures,
-            false => self,
         }
     }
 

@@ -1,6 +1,7 @@
 //! The element arrays each GPU stage binds (springs, hinges, seams, triangles, self-collision
 //! neighbours, the bodies' SDF nodes), in binding order, and their texel contents.
 
+use super::array_layout::ArrayLayout;
 use super::kernels::VbdEnergies;
 use crate::model::ClothModel;
 use crate::plan::Pass;
@@ -24,6 +25,18 @@ pub(super) enum Elements {
     Triangles,
     SelfNeighbours,
     Sdf,
+}
+
+impl Elements {
+    /// Where this kind's arrays live under the context's `layout`. The bodies' signed distance
+    /// field stays a texture: its sampling helpers take the grid as a function argument, which
+    /// WGSL allows for textures and not for storage arrays.
+    pub(super) fn layout(self, layout: ArrayLayout) -> ArrayLayout {
+        match self {
+            Elements::Sdf => ArrayLayout::Textures,
+            _ => layout,
+        }
+    }
 }
 
 pub(super) fn stage_elements(pass: Pass, energies: VbdEnergies) -> Vec<Elements> {

@@ -285,15 +285,13 @@ impl GpuSolver {
             };
             // Stage-specific arrays live as long as the bind groups that hold them.
             let mut owned: Vec<TexelArray> = Vec::new();
-            let mut add = |label: &'static str, format, bytes: &[u8]| -> Result<(), Error> {
-                labels.push(label);
-                let none = wgpu::TextureUsages::empty();
-                owned.push(TexelArray::with_data(ctx, label, format, bytes, none)?);
-                Ok(())
-            };
             for kind in stage_elements(pass, energies) {
                 for (label, format, bytes) in element_arrays(model, kind) {
-                    add(label, format, &bytes)?;
+                    labels.push(label);
+                    let (layout, none) = (kind.layout(ctx.layout), wgpu::TextureUsages::empty());
+                    owned.push(TexelArray::with_data_in(
+                        layout, ctx, label, format, &bytes, none,
+                    )?);
                 }
             }
             let (force_out, force_in) = if pass.is_force() {

@@ -25,9 +25,21 @@ pub enum TexelStorage {
 }
 
 impl TexelArray {
-    /// A zero-filled array of `len` texels. Fails when `len` needs more rows than the adapter's
-    /// largest 2D texture.
+    /// A zero-filled array of `len` texels in the context's layout. Fails when `len` needs more
+    /// rows than the adapter's largest 2D texture.
     pub fn new(
+        ctx: &GpuContext,
+        label: &str,
+        format: wgpu::TextureFormat,
+        len: usize,
+        usage: wgpu::TextureUsages,
+    ) -> Result<Self, Error> {
+        Self::new_in(ctx.layout, ctx, label, format, len, usage)
+    }
+
+    /// A zero-filled array of `len` texels in `layout`.
+    pub fn new_in(
+        layout: ArrayLayout,
         ctx: &GpuContext,
         label: &str,
         format: wgpu::TextureFormat,
@@ -42,7 +54,7 @@ impl TexelArray {
                  adapter's textures have at most {max_rows}; use a coarser mesh"
             )));
         }
-        let storage = match ctx.layout.for_array(label) {
+        let storage = match layout {
             ArrayLayout::Textures => texture_storage(ctx, label, format, rows as u32, usage),
             ArrayLayout::Buffers => {
                 TexelStorage::Buffer(ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -62,8 +74,21 @@ impl TexelArray {
         })
     }
 
-    /// An array holding `bytes`, whose length must be a whole number of texels.
+    /// An array holding `bytes` in the context's layout; their length must be a whole number of
+    /// texels.
     pub fn with_data(
+        ctx: &GpuContext,
+        label: &str,
+        format: wgpu::TextureFormat,
+        bytes: &[u8],
+        usage: wgpu::TextureUsages,
+    ) -> Result<Self, Error> {
+        Self::with_data_in(ctx.layout, ctx, label, format, bytes, usage)
+    }
+
+    /// An array holding `bytes` in `layout`.
+    pub fn with_data_in(
+        layout: ArrayLayout,
         ctx: &GpuContext,
         label: &str,
         format: wgpu::TextureFormat,
@@ -76,7 +101,7 @@ impl TexelArray {
             0,
             "{label}: not a whole number of texels"
         );
-        let array = Self::new(ctx, label, format, bytes.len() / texel, usage)?;
+        let array = Self::new_in(layout, ctx, label, format, bytes.len() / texel, usage)?;
         array.write(&ctx.queue, bytes);
         Ok(array)
     }

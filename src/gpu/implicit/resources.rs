@@ -169,7 +169,8 @@ impl SolveTextures {
         for kind in kinds {
             for (label, format, bytes) in element_arrays(model, kind) {
                 labels.push(label);
-                let texture = TexelArray::with_data(ctx, label, format, &bytes, none)?;
+                let layout = kind.layout(ctx.layout);
+                let texture = TexelArray::with_data_in(layout, ctx, label, format, &bytes, none)?;
                 elements.push((label, texture));
             }
         }
