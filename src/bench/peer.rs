@@ -422,6 +422,21 @@ pub fn run_cli(opts: &PeerOptions) -> Result<PeerReport, Error> {
     Ok(report)
 }
 
+/// A peer driver's command line: its own arguments, then the frames, device and state folder
+/// that every driver takes.
+fn driver_args(own: &[&str], opts: &PeerOptions, states: &Path) -> Vec<String> {
+    let mut args: Vec<String> = own.iter().map(|s| s.to_string()).collect();
+    args.extend([
+        "--frames".into(),
+        opts.frames.to_string(),
+        "--device".into(),
+        opts.peer_device.clone(),
+        "--state-dir".into(),
+        states.display().to_string(),
+    ]);
+    args
+}
+
 fn measure(
     opts: &PeerOptions,
     env: Option<&PythonEnv>,
@@ -430,8 +445,6 @@ fn measure(
     report: &mut PeerReport,
 ) -> Result<(), Error> {
     let wants = |s: System| opts.systems.contains(&s);
-    let frames = opts.frames.to_string();
-    let state_dir = states.display().to_string();
     let mut warp_states: Vec<(u32, Vec<Vec3>)> = Vec::new();
     let mut all_sizes: Vec<u32> = opts.sizes.clone();
     all_sizes.extend(opts.newton_sizes.iter().filter(|n| !opts.sizes.contains(n)));
@@ -439,20 +452,7 @@ fn measure(
     for &dim in &all_sizes {
         let model = warp_cloth::model(dim);
         if let (Some(env), true) = (env, wants(System::Warp)) {
-            let args: Vec<String> = [
-                "warp",
-                "--sizes",
-                &dim.to_string(),
-                "--frames",
-                &frames,
-                "--device",
-                &opts.peer_device,
-                "--state-dir",
-                &state_dir,
-            ]
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
+            let args = driver_args(&["warp", "--sizes", &dim.to_string()], opts, states);
             let records = peer_or_note(run_driver(env, &args), "warp", report);
             for r in &records {
                 check_same_cloth(r, &model, env)?;
@@ -491,26 +491,18 @@ fn measure(
             let Some(env) = env.filter(|_| wants(System::Newton)) else {
                 continue;
             };
-            let args: Vec<String> = [
+            let own = [
                 "newton",
                 "--solver",
                 solver,
                 "--sizes",
                 &dim.to_string(),
-                "--frames",
-                &frames,
                 "--substeps",
                 &substeps.to_string(),
                 "--iterations",
                 &opts.iterations.to_string(),
-                "--device",
-                &opts.peer_device,
-                "--state-dir",
-                &state_dir,
-            ]
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
+            ];
+            let args = driver_args(&own, opts, states);
             let what = format!("newton --solver {solver} at {dim}²");
             for r in peer_or_note(run_driver(env, &args), &what, report) {
                 check_same_cloth(&r, &model, env)?;
