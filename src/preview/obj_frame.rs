@@ -17,6 +17,8 @@ pub struct FrameMesh {
     pub triangles: Vec<[u32; 3]>,
     /// Each triangle's group (panel) in order of first appearance; 0 without `g` records.
     pub groups: Vec<u32>,
+    /// The groups' names (the panels'), indexed by `groups`' values.
+    pub group_names: Vec<String>,
     /// Pattern coordinates in m, one per vertex, or empty when the file has none.
     pub uv: Vec<Vec2>,
 }
@@ -106,6 +108,7 @@ pub fn read_obj(path: &Path) -> Result<FrameMesh, Error> {
             _ => {}
         }
     }
+    m.group_names = group_names;
     if m.uv.len() != m.positions.len() {
         m.uv.clear();
     }

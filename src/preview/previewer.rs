@@ -59,6 +59,27 @@ pub fn bounds(points: &[Vec3]) -> (Vec3, Vec3) {
     )
 }
 
+/// The frame's pattern coordinates turned so that u runs along each panel's warp (its grain
+/// angle from the panel's x axis), so that the checker and a fabric image follow the grain as a
+/// print on the cloth would: a bias-cut panel shows its checks at 45°. Panels do not share
+/// particles, so a vertex takes any of its triangles' panel.
+fn along_grain(f: &FrameMesh, grain: &crate::scene::Grain) -> Vec<glam::Vec2> {
+    let angles: Vec<f32> = (f.group_names.iter())
+        .map(|name| grain.panels.get(name).copied().unwrap_or(grain.default))
+        .collect();
+    let mut angle = vec![grain.default; f.uv.len()];
+    for (t, &g) in f.triangles.iter().zip(&f.groups) {
+        for &i in t {
+            if let (Some(a), Some(&panel)) = (angle.get_mut(i as usize), angles.get(g as usize)) {
+                *a = panel;
+            }
+        }
+    }
+    (f.uv.iter().zip(angle))
+        .map(|(&uv, a)| glam::Vec2::from_angle(-a).rotate(uv))
+        .collect()
+}
+
 /// Renders frames of one run folder.
 pub struct Previewer<'a> {
     ctx: GpuContext,
@@ -153,6 +174,9 @@ impl<'a> Previewer<'a> {
         };
         let mut m = read_obj(&path)?;
         m.number = k;
+        if let Some(s) = self.scene {
+            m.uv = along_grain(&m, &s.grain);
+        }
         Ok(m)
     }
 
@@ -427,5 +451,48 @@ impl<'a> Previewer<'a> {
             draw_legend(&mut pixels, w, h, &legend);
         }
         Ok(pixels)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec2;
+
+    #[test]
+    fn pattern_coordinates_turn_so_that_u_runs_along_each_panels_warp() {
+        // Two panels of one triangle each: "front" cut on the bias (45°), "back" on the
+        // default grain (10°); the third vertex of each lies along its panel's warp.
+        let warp = |deg: f32| Vec2::from_angle(deg.to_radians());
+        let frame = FrameMesh {
+            positions: vec![Vec3::ZERO; 6],
+            triangles: vec![[0, 1, 2], [3, 4, 5]],
+            groups: vec![0, 1],
+            group_names: vec!["front".into(), "back".into()],
+            uv: vec![
+                Vec2::ZERO,
+                Vec2::Y,
+                0.3 * warp(45.0),
+                Vec2::ZERO,
+                Vec2::X,
+                0.3 * warp(10.0),
+            ],
+            ..Default::default()
+        };
+        let grain = crate::scene::Grain {
+            default: 10f32.to_radians(),
+            panels: [("front".to_string(), 45f32.to_radians())].into(),
+        };
+        let uv = along_grain(&frame, &grain);
+        // A rotation of f32 unit vectors: a few ulps of 0.3 m.
+        for (got, want) in [
+            (uv[2], Vec2::new(0.3, 0.0)),
+            (uv[5], Vec2::new(0.3, 0.0)),
+            // The panel's y axis, turned by −45° with the rest of the front.
+            (uv[1], Vec2::splat(0.5f32.sqrt())),
+        ] {
+            assert!(got.distance(want) < 1e-6, "{got} against {want}");
+        }
+        assert!(uv[3].length() == 0.0 && (uv[4].length() - 1.0).abs() < 1e-6);
     }
 }
