@@ -11,12 +11,12 @@ use super::line_energy::{apply_correction, line_energy, line_search};
 use super::pcg::{pcg_direction, pcg_matvec, pcg_start, pcg_step, PcgScalars};
 use super::prolong::{correction_filter, prolong};
 use super::restrict::restrict;
-use super::smooth::{block_jacobi, level_residual, smooth};
+use super::smooth::{block_jacobi, level_residual, smooth, ColourRows};
 use super::vbd_solve::vbd_solve;
 use crate::model::layout::{
     Hinge, Membrane, Seam, SimParams, SpringRef, SubstepParams, Sweep, WORKGROUP_SIZE,
 };
-use crate::model::multigrid::Multigrid;
+use crate::model::multigrid::{BlockPattern, Multigrid};
 use crate::model::{ClothModel, Csr};
 use crate::plan::SolveOp;
 use glam::{Mat3, Vec4};
@@ -80,16 +80,27 @@ pub struct LevelArrays {
     pub e: Vec<Vec4>,
     /// Its residual rhs − A·e.
     pub res: Vec<Vec4>,
+    /// Its matrix again, each colour's rows side by side, for the smoothing sweeps.
+    pub by_colour: ColourRows,
 }
 
 impl LevelArrays {
-    fn new(particles: usize, blocks: usize) -> LevelArrays {
+    /// The arrays of a level of matrix structure `pattern` whose particles `order` lists colour
+    /// after colour (colour k from `colour_offsets[k]`).
+    fn new(pattern: &BlockPattern, order: &[u32], colour_offsets: &[u32]) -> LevelArrays {
+        let particles = pattern.rows();
         LevelArrays {
-            blocks: vec![Mat3::ZERO; blocks],
+            blocks: vec![Mat3::ZERO; pattern.blocks()],
             rhs: vec![Vec4::ZERO; particles],
             e: vec![Vec4::ZERO; particles],
             res: vec![Vec4::ZERO; particles],
+            by_colour: ColourRows::new(pattern, order, colour_offsets),
         }
+    }
+
+    /// Copies its matrix, just computed, into `by_colour`.
+    fn matrix_changed(&mut self) {
+        self.by_colour.fill(&self.blocks);
     }
 }
 
@@ -173,9 +184,11 @@ impl Vbd {
                 .multigrid
                 .clone()
                 .expect("a multigrid schedule has levels");
-            let mut levels = vec![LevelArrays::new(n, structure.fine.blocks())];
+            let fine = LevelArrays::new(&structure.fine, &coloring.order, &coloring.offsets);
+            let mut levels = vec![fine];
             levels.extend(
-                (structure.levels.iter()).map(|l| LevelArrays::new(l.len(), l.pattern.blocks())),
+                (structure.levels.iter())
+                    .map(|l| LevelArrays::new(&l.pattern, &l.order, &l.color_offsets)),
             );
             Newton {
                 force: vec![Vec4::ZERO; n],
@@ -322,34 +335,16 @@ impl Vbd {
                         .newton
                         .as_mut()
                         .expect("Newton steps need coarse levels");
-                    let fine = FineColours {
-                        order: &self.order,
-                        colours: &self.colours,
-                    };
-                    newton.run(op, &s, &fine, &mut self.x);
+                    newton.run(op, &s, &mut self.x);
                 }
             }
         }
     }
 }
 
-/// The fine level's colours, for its Gauss–Seidel sweeps.
-struct FineColours<'a> {
-    order: &'a [u32],
-    colours: &'a [Sweep],
-}
-
-impl FineColours<'_> {
-    /// The particles of colour `k`.
-    fn rows(&self, k: usize) -> &[u32] {
-        let c = &self.colours[k];
-        &self.order[c.first as usize..(c.first + c.count) as usize]
-    }
-}
-
 impl Newton {
     /// One operation of a Newton step.
-    fn run(&mut self, op: SolveOp, s: &Implicit, fine: &FineColours, x: &mut [Vec4]) {
+    fn run(&mut self, op: SolveOp, s: &Implicit, x: &mut [Vec4]) {
         let mg = &*self.structure;
         let level = |l: u32| &mg.levels[l as usize - 1];
         let pattern = |l: u32| if l == 0 { &mg.fine } else { &level(l).pattern };
@@ -363,7 +358,8 @@ impl Newton {
                     &mg.element_blocks,
                     &mut self.force,
                     &mut l0.blocks,
-                )
+                );
+                l0.matrix_changed();
             }
             SolveOp::CoarseOperator { level: l } => {
                 let (finer, coarse) = self.levels.split_at_mut(l as usize);
@@ -372,6 +368,7 @@ impl Newton {
                     &finer[l as usize - 1].blocks,
                     &mut coarse[0].blocks,
                 );
+                coarse[0].matrix_changed();
             }
             SolveOp::PcgStart => {
                 let l0 = &mut self.levels[0];
@@ -379,26 +376,10 @@ impl Newton {
             }
             SolveOp::Smooth { level: l, backward } => {
                 let a = &mut self.levels[l as usize];
-                let count = if l == 0 {
-                    fine.colours.len()
-                } else {
-                    level(l).colors()
-                };
+                let count = a.by_colour.colours();
                 for j in 0..count {
                     let k = if backward { count - 1 - j } else { j };
-                    let rows = if l == 0 {
-                        fine.rows(k)
-                    } else {
-                        level(l).color_rows(k)
-                    };
-                    smooth(
-                        pattern(l),
-                        &a.blocks,
-                        rows,
-                        &a.rhs,
-                        &mut a.e,
-                        &mut self.next,
-                    );
+                    smooth(&a.by_colour, k, &a.rhs, &mut a.e, &mut self.next);
                 }
             }
             SolveOp::BlockJacobi => {

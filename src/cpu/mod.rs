@@ -68,7 +68,7 @@ pub use prolong::{correction_filter, prolong};
 pub use restrict::restrict;
 pub use seam_forces::{rest_gap, seam_force, seam_forces};
 pub use self_collide::{point_triangle_impulses, self_collide};
-pub use smooth::{level_residual, smooth};
+pub use smooth::{level_residual, smooth, ColourRows};
 pub use spring_forces::spring_forces;
 pub use strain_limit::strain_limit;
 pub use vbd_finish::vbd_finish;

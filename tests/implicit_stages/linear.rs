@@ -100,13 +100,18 @@ pub(crate) fn check_level_op(
             let l = level as usize;
             let colours = colours(mg, fine, l);
             let a = &mut lv[l];
+            let mut offsets = vec![0u32];
+            offsets.extend(colours.iter().scan(0, |end, c| {
+                *end += c.len() as u32;
+                Some(*end)
+            }));
+            let mut rows = cpu::ColourRows::new(pattern(l), &colours.concat(), &offsets);
+            rows.fill(&a.blocks);
             let mut next = Vec::new();
-            let mut run = |rows: &[u32]| {
-                cpu::smooth(pattern(l), &a.blocks, rows, &a.rhs, &mut a.e, &mut next)
-            };
+            let mut run = |k: usize| cpu::smooth(&rows, k, &a.rhs, &mut a.e, &mut next);
             match backward {
-                false => colours.iter().for_each(|r| run(r)),
-                true => colours.iter().rev().for_each(|r| run(r)),
+                false => (0..colours.len()).for_each(&mut run),
+                true => (0..colours.len()).rev().for_each(&mut run),
             }
             // A row's update A_rr⁻¹(rhs_r − Σ A_rc·e_c) rounds a few times relative to the
             // largest correction (the blocks are diagonally dominant, so the sum over A_rr is at
