@@ -211,8 +211,9 @@ fn hinge_frame(stiffness: f32, x3: vec3<f32>, x4: vec3<f32>, x1: vec3<f32>, x2: 
     let n2_len = sqrt(n2_sq);
     let n1_hat = n1 / n1_len;
     let n2_hat = n2 / n2_len;
-    let cos_theta = clamp(dot(n1_hat, n2_hat), -1.0, 1.0);
-    var sin_half = sqrt(max(0.0, 0.5 * (1.0 - cos_theta)));
+    // sin(θ/2) = |n̂1 − n̂2|/2, without the cancellation of √(½(1 − cos θ)) at small θ
+    // (see cpu/hinge_forces.rs).
+    var sin_half = min(0.5 * length(n1_hat - n2_hat), 1.0);
     if (dot(cross(n1_hat, n2_hat), e) < 0.0) {
         sin_half = -sin_half;
     }

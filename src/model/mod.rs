@@ -98,8 +98,8 @@ pub fn hinge_sin_half(x3: Vec3, x4: Vec3, x1: Vec3, x2: Vec3) -> f32 {
     let e = x4 - x3;
     let n1 = (x1 - x3).cross(x1 - x4).normalize_or_zero();
     let n2 = (x2 - x4).cross(x2 - x3).normalize_or_zero();
-    let cos_theta = n1.dot(n2).clamp(-1.0, 1.0);
-    let s = (0.5 * (1.0 - cos_theta)).max(0.0).sqrt();
+    // |n̂1 − n̂2| = 2 sin(θ/2), without the cancellation of √(½(1 − cos θ)) at small θ.
+    let s = (0.5 * (n1 - n2).length()).min(1.0);
     if n1.cross(n2).dot(e) < 0.0 {
         -s
     } else {
