@@ -1,7 +1,7 @@
 //! The contenders' structures, the warm-up that records the states every contender sees, and
 //! the timing and contact comparison on those states.
 
-use super::{CollisionOptions, CollisionRow, Contender};
+use super::{deforming, CollisionOptions, CollisionRow, Contender};
 use crate::body::bvh::BodyBvh;
 use crate::body::edges::BodyEdges;
 use crate::body::exact::ExactBody;
@@ -46,6 +46,12 @@ pub fn build_all(
     let sdf =
         Sdf::bake(&base.body, settings.sdf_resolution, settings.sdf_margin).map_err(failed)?;
     let bake_s = start.elapsed().as_secs_f64();
+    // A deforming body's SDF also holds the words its collision reads after the rest pose's
+    // nodes: the scene's, whose rest-pose part was just timed.
+    let sdf = match base.deformed {
+        Some(_) => base.sdf.clone(),
+        None => sdf,
+    };
     let mesh = &base.body.mesh;
     let mut all: Vec<Contender> = contenders.to_vec();
     if !all.contains(&Contender::Cpu(Strategy::Exact)) {
@@ -124,9 +130,16 @@ pub struct Sample {
 /// body holds still).
 pub fn sample_frames(prep: &Prepared, count: usize) -> Vec<u32> {
     let end = prep.frames as f32 * prep.frame_dt;
-    let motion = &prep.model.colliders.first().expect("a body").motion;
+    let body = prep.model.colliders.first().expect("a body");
+    let motion = &body.motion;
     let (t0, t1) = match (motion.moves(), motion.keys.first(), motion.keys.last()) {
         (true, Some(a), Some(b)) => (a.time.min(end), b.time.min(end)),
+        // A deforming body: over its last play of the motion that the run reaches.
+        _ if body.deformed.is_some() => {
+            let d = &body.deformed.as_ref().expect("checked").deformation;
+            let last = d.end().min(end);
+            ((last - d.motion_length()).max(0.0), last)
+        }
         _ => (0.5 * end, end),
     };
     let mut frames: Vec<u32> = (0..count)
@@ -244,16 +257,28 @@ fn moved(before: &ParticleState, after: &ParticleState) -> Vec<bool> {
         .collect()
 }
 
-/// The deepest any particle, and any cloth-edge midpoint, lies inside the exact body at the
-/// body's pose of `step`, in m (0 when nothing is inside).
+/// The deepest any particle, and any cloth-edge midpoint, lies inside the exact body at
+/// `step` (a rigid body at its pose then, a deforming one rebuilt then), in m (0 when nothing
+/// is inside).
 fn deepest(
-    exact: &ExactBody,
+    reference: &Collider,
     step: &SubstepParams,
+    dt: f32,
     pos: &[Vec4],
     edges: &[[u32; 2]],
-) -> (f32, f32) {
+) -> Result<(f32, f32), Error> {
+    if reference.deformed.is_some() {
+        let exact = deforming::exact(&deforming::mesh_at(reference, step, dt))?;
+        let depth = |x: Vec3| (-exact.query(x).0).max(0.0);
+        return Ok(deepest_by(depth, pos, edges));
+    }
     let pose = &step.bodies[0];
+    let exact = &reference.exact;
     let depth = |x: Vec3| (-exact.query(to_body_frame(pose, x).0).0).max(0.0);
+    Ok(deepest_by(depth, pos, edges))
+}
+
+fn deepest_by(depth: impl Fn(Vec3) -> f32 + Sync, pos: &[Vec4], edges: &[[u32; 2]]) -> (f32, f32) {
     let particles = pos
         .par_iter()
         .map(|p| depth(p.truncate()))
@@ -333,6 +358,21 @@ pub fn measure(
     ctx: Option<&GpuContext>,
     opts: &CollisionOptions,
 ) -> Result<Vec<CollisionRow>, Error> {
+    // A deforming body's rebuilt contenders, timed apart from the solver.
+    let body = &prep.model.colliders.first().expect("a body");
+    let mut rebuilt: Vec<CollisionRow> = match body.deformed.is_some() {
+        true => (deforming::REBUILT.iter())
+            .filter(|c| built.iter().any(|b| b.contender == **c))
+            .filter(|c| opts.contenders.is_empty() || opts.contenders.iter().any(|n| n == c.name()))
+            .map(|&c| {
+                let (n, t) = (prep.model.len(), body.body.mesh.triangles.len());
+                let mut row = deforming::row(c, n, t, samples.len(), opts.repeats.max(1));
+                row.window_substeps = opts.window.clamp(1, prep.substeps as usize);
+                row
+            })
+            .collect(),
+        false => Vec::new(),
+    };
     let window = opts.window.clamp(1, prep.substeps as usize);
     let reference = (built.iter())
         .find(|b| b.contender == Contender::Cpu(Strategy::Exact))
@@ -340,7 +380,9 @@ pub fn measure(
     let alone_plan = || vec![Pass::CollideBody];
     let mut exact_alone = solver(None, prep, &reference.collider, alone_plan(), 1)?;
     let edges: Vec<[u32; 2]> = prep.model.springs.iter().map(|s| s.ends).collect();
-    let exact = &reference.collider.exact;
+    let exact = &reference.collider;
+    let deformed = exact.deformed.is_some();
+    let dt = prep.params.dt;
     // The plan less the collision stage, per backend: what a substep costs without it.
     let sdf = (built.iter())
         .find(|b| {
@@ -361,6 +403,15 @@ pub fn measure(
     let mut runners = Vec::new();
     for &b in built {
         if !opts.contenders.is_empty() && !opts.contenders.iter().any(|n| n == b.contender.name()) {
+            continue;
+        }
+        // On a deforming body only the SDF contenders run through the solver.
+        if deformed
+            && !matches!(
+                b.contender,
+                Contender::GpuSdf | Contender::Cpu(Strategy::Sdf)
+            )
+        {
             continue;
         }
         let gpu = (b.contender == Contender::GpuSdf).then_some(ctx).flatten();
@@ -410,11 +461,20 @@ pub fn measure(
     for s in samples {
         println!("  sample at frame {}", s.frame);
         let first = &s.steps[..1];
-        let x = exact_alone.solver();
-        x.set_params(&s.params);
-        x.set_state(&s.pre);
-        x.advance(first)?;
-        let truth = moved(&s.pre, &x.state()?);
+        let thickness = s.params.bodies[0].thickness;
+        let truth = match deformed {
+            true => {
+                let mesh = deforming::mesh_at(exact, &first[0], dt);
+                deforming::truth(&deforming::exact(&mesh)?, &s.pre.positions, thickness)
+            }
+            false => {
+                let x = exact_alone.solver();
+                x.set_params(&s.params);
+                x.set_state(&s.pre);
+                x.advance(first)?;
+                moved(&s.pre, &x.state()?)
+            }
+        };
         // The fastest stage and (GPU) the fastest empty batch, each the least disturbed.
         let mut fastest = vec![(f64::INFINITY, f64::INFINITY); runners.len()];
         for round in 0..most {
@@ -433,7 +493,7 @@ pub fn measure(
             alone.advance(first)?;
             let after = alone.state()?;
             let found = moved(&s.pre, &after);
-            let (d, e) = deepest(exact, &first[0], &after.positions, &edges);
+            let (d, e) = deepest(exact, &first[0], dt, &after.positions, &edges)?;
             let row = &mut r.row;
             row.collision_us += 1e6 * (best.0 - best.1) / samples.len() as f64;
             row.contacts += found.iter().filter(|&&m| m).count();
@@ -459,7 +519,7 @@ pub fn measure(
             with.push(window_seconds(&mut r.whole, s, steps, true)?);
             let end = r.whole.solver().state()?;
             let last = &steps[steps.len() - 1];
-            let (d, e) = deepest(exact, last, &end.positions, &edges);
+            let (d, e) = deepest(exact, last, dt, &end.positions, &edges)?;
             let row = &mut r.row;
             row.max_penetration = row.max_penetration.max(d);
             row.max_edge_penetration = row.max_edge_penetration.max(e);
@@ -473,8 +533,52 @@ pub fn measure(
             row.substep_us += 1e6 * seconds / samples.len() as f64;
             row.in_run_us += 1e6 * (seconds - bare) / samples.len() as f64;
         }
+        if !rebuilt.is_empty() {
+            if bare_cpu.is_infinite() {
+                bare_cpu = window_seconds(&mut without_cpu, s, steps, false)?;
+            }
+            let mesh = deforming::mesh_at(exact, &first[0], dt);
+            for row in rebuilt.iter_mut() {
+                rebuilt_sample(row, &mesh, s, &truth, bare_cpu, samples.len())?;
+            }
+        }
     }
-    Ok(runners.into_iter().map(|r| r.row).collect())
+    let mut rows: Vec<CollisionRow> = runners.into_iter().map(|r| r.row).collect();
+    rows.extend(rebuilt);
+    Ok(rows)
+}
+
+/// A rebuilt contender's figures on one sample: the fastest of its repeats (the structure's
+/// build time from the same run), its contacts against `truth`, and a substep as the plan
+/// less collision (`bare`, s) plus its stage.
+fn rebuilt_sample(
+    row: &mut CollisionRow,
+    mesh: &crate::mesh::TriMesh,
+    s: &Sample,
+    truth: &[bool],
+    bare: f64,
+    samples: usize,
+) -> Result<(), Error> {
+    let thickness = s.params.bodies[0].thickness;
+    let mut best: Option<(f64, f64, usize, Vec<bool>)> = None;
+    for _ in 0..row.repeats.max(1) {
+        let run = deforming::rebuilt_stage(row.contender, mesh, &s.pre.positions, thickness)?;
+        if best.as_ref().is_none_or(|b| run.0 < b.0) {
+            best = Some(run);
+        }
+    }
+    let (stage, build, bytes, found) = best.expect("at least one repeat");
+    let n = samples as f64;
+    row.collision_us += 1e6 * stage / n;
+    row.in_run_us += 1e6 * stage / n;
+    row.substep_us += 1e6 * (bare + stage) / n;
+    row.build_s += build / n;
+    row.memory_bytes = row.memory_bytes.max(bytes);
+    row.contacts += found.iter().filter(|&&m| m).count();
+    row.exact_contacts += truth.iter().filter(|&&m| m).count();
+    row.missed += truth.iter().zip(&found).filter(|(&t, &f)| t && !f).count();
+    row.extra += truth.iter().zip(&found).filter(|(&t, &f)| f && !t).count();
+    Ok(())
 }
 
 /// One timed collision stage on the sample's state and the fixed cost to take off it, in s.

@@ -13,6 +13,7 @@
 //! inside the exact body is measured. Writes `collision.csv`, `collision.md` and
 //! `collision.svg`.
 
+mod deforming;
 mod measure;
 mod report;
 
@@ -267,6 +268,23 @@ pub fn run_cli(opts: &CollisionOptions) -> Result<Vec<CollisionRow>, Error> {
         },
         false => None,
     };
+    // A deforming body: only the contenders that can follow it (see `deforming`).
+    let deformed = scene.bodies.first().is_some_and(|b| b.deform.is_some());
+    let contenders: Vec<Contender> = match deformed {
+        true => {
+            let (kept, dropped): (Vec<_>, Vec<_>) =
+                contenders.into_iter().partition(|&c| deforming::applies(c));
+            if !dropped.is_empty() {
+                let names: Vec<_> = dropped.iter().map(|c| c.name()).collect();
+                println!(
+                    "the body deforms: {} do not apply to it (rigid-body structures)",
+                    names.join(", ")
+                );
+            }
+            kept
+        }
+        false => contenders,
+    };
     let cpu_device = format!("CPU ({})", cpu_threads_description());
     let gpu_device = ctx.as_ref().map(|c| c.report().describe());
     let mut rows = Vec::new();
@@ -317,7 +335,10 @@ pub fn run_cli(opts: &CollisionOptions) -> Result<Vec<CollisionRow>, Error> {
     let svg = opts.out.join("collision.svg");
     write_atomic(&csv, report::csv_text(&rows).as_bytes())?;
     let devices = (cpu_device.as_str(), gpu_device.as_deref());
-    write_atomic(&md, report::md_text(&rows, opts, devices).as_bytes())?;
+    write_atomic(
+        &md,
+        report::md_text(&rows, opts, devices, deformed).as_bytes(),
+    )?;
     report::plot(&rows, &svg)?;
     println!(
         "wrote {}, {} and {}",

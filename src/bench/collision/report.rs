@@ -125,8 +125,22 @@ pub(super) fn md_text(
     rows: &[CollisionRow],
     opts: &CollisionOptions,
     (cpu, gpu): (&str, Option<&str>),
+    deforming: bool,
 ) -> String {
     let first = rows.first();
+    let body = match deforming {
+        false => "The body is rigid: its structures are built once and never refitted.",
+        true => {
+            "The body deforms: `gpu-sdf` and `sdf` map each point back to the rest pose by \
+             inverse skinning and read the rest pose's SDF (what the solver does); `bvh-aabb` \
+             and `exact` are rebuilt over the deformed mesh at each substep, their stage being \
+             the rebuild plus a query per particle (their contacts: the particles within the \
+             thickness; their substep: the plan less collision plus that stage; the response \
+             is not run, so no depth after it). `exact` against the deformed mesh is the \
+             reference for contacts and depths. The other BVHs answer as `bvh-aabb` does, and \
+             `exact+edges` and `brute` are rigid-body references: they do not apply."
+        }
+    };
     let mut md = format!(
         "Collision strategies on `{}` (body: {} triangles). One warm-up run per size (CPU, SDF) \
          records the state at {} frame(s) spread over the body's motion; every strategy then \
@@ -139,8 +153,7 @@ pub(super) fn md_text(
          share of the substep the table gives. All are averaged over the samples. **Contacts** \
          are the particles the stage moved, summed over the samples; **missed** and **extra** \
          are against `exact`. **Deepest** is the largest depth inside the exact body of any \
-         particle (or cloth-edge midpoint) after the stage and after each window. The body is \
-         rigid: its structures are built once and never refitted. Our three BVHs keep their \
+         particle (or cloth-edge midpoint) after the stage and after each window. {body} Our three BVHs keep their \
          volume in one enum, so their nodes take the same memory whatever the volume.\n\n\
          - command: `{}`\n- CPU: {cpu}\n- GPU: {}\n",
         opts.scene.display(),
