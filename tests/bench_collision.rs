@@ -9,11 +9,11 @@ use std::collections::HashMap;
 
 type Row = HashMap<String, String>;
 
-#[test]
-fn bench_collision_quick_writes_every_strategy() {
-    let gpu = common::gpu().is_some();
-    let out = common::out_dir("bench-collision", "quick");
-    let scene = common::fixture("scenes/skirt_collision.toml");
+/// `drapekit bench collision --quick` on the scene `name` into a test folder called `folder`:
+/// the folder, and its CSV's header and rows.
+fn quick_run(name: &str, folder: &str) -> (std::path::PathBuf, Vec<String>, Vec<Row>) {
+    let out = common::out_dir("bench-collision", folder);
+    let scene = common::fixture(&format!("scenes/{name}"));
     let r = common::drapekit(&[
         "bench",
         "collision",
@@ -27,6 +27,13 @@ fn bench_collision_quick_writes_every_strategy() {
     ]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let (header, rows) = common::read_csv(&out.join("collision.csv"), "note");
+    (out, header, rows)
+}
+
+#[test]
+fn bench_collision_quick_writes_every_strategy() {
+    let gpu = common::gpu().is_some();
+    let (out, header, rows) = quick_run("skirt_collision.toml", "quick");
     assert_eq!(header, CSV_COLUMNS);
     assert_eq!(
         header,
@@ -203,21 +210,7 @@ fn bench_collision_quick_on_the_walking_mannequin_runs_the_deforming_contenders(
     // The deforming body: the SDF contenders through the solver, `bvh-aabb` and `exact`
     // rebuilt over the deformed mesh each substep; the rigid-body-only ones left out.
     let gpu = common::gpu().is_some();
-    let out = common::out_dir("bench-collision", "quick-walk");
-    let scene = common::fixture("scenes/skirt_walk_collision.toml");
-    let r = common::drapekit(&[
-        "bench",
-        "collision",
-        "--quick",
-        "--adapter",
-        "fallback",
-        "--scene",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let (_, rows) = common::read_csv(&out.join("collision.csv"), "note");
+    let (out, _, rows) = quick_run("skirt_walk_collision.toml", "quick-walk");
     let by_name: HashMap<&str, &Row> = rows.iter().map(|r| (r["strategy"].as_str(), r)).collect();
     let mut expected = vec!["sdf", "bvh-aabb", "exact"];
     if gpu {
