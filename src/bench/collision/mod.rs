@@ -339,7 +339,7 @@ pub fn run_cli(opts: &CollisionOptions) -> Result<Vec<CollisionRow>, Error> {
         &md,
         report::md_text(&rows, opts, devices, deformed).as_bytes(),
     )?;
-    report::plot(&rows, &svg)?;
+    report::plot(&rows, deformed, &svg)?;
     println!(
         "wrote {}, {} and {}",
         csv.display(),

@@ -206,8 +206,13 @@ pub(super) fn md_text(
     md
 }
 
-/// Collision time per substep against particles, one line per strategy, on log axes.
-pub(super) fn plot(rows: &[CollisionRow], path: &Path) -> Result<(), Error> {
+/// Collision time per substep against particles, one line per strategy, on log axes, titled
+/// with the body's motion (`deformed`: a deforming body).
+pub(super) fn plot(rows: &[CollisionRow], deformed: bool, path: &Path) -> Result<(), Error> {
+    let body = match deformed {
+        true => "the cloth on a deforming body",
+        false => "the cloth on a rigid moving body",
+    };
     let series: Vec<Series> = (Contender::ALL.iter())
         .map(|&c| Series {
             name: c.name().to_string(),
@@ -220,7 +225,7 @@ pub(super) fn plot(rows: &[CollisionRow], path: &Path) -> Result<(), Error> {
         .collect();
     log_log_svg(
         &series,
-        "Collision stage per substep: a skirt on a turning body",
+        &format!("Collision stage per substep: {body}"),
         "particles",
         "µs per substep (collision stage)",
         path,
