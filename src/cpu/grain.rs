@@ -8,8 +8,8 @@
 //! loops cost more on many threads than on one. So each parallel loop asks for tasks of at
 //! least `TASK_NANOS` of work (`with_min_len` of the grain of its kind of element), and a loop
 //! shorter than two grains runs as one task on the calling thread: a plain loop, no other thread
-//! involved. A smoothing sweep's colours are the exception (`colour`): they split across every
-//! thread of the pool down to a smaller grain.
+//! involved. A Gauss–Seidel sweep's colours are the exception: they split across every thread
+//! of the pool down to `COLOUR_ROWS`, inside one parallel region per sweep (`colour_run`).
 //!
 //! The grains divide `TASK_NANOS` by an element's cost, measured on one core of a 2-core AMD
 //! EPYC with the solve's per-operation timings (the cotton T-shirt and the 128² benchmark
@@ -28,7 +28,9 @@ pub const ARRAY: usize = TASK_NANOS / 3;
 /// (a 3×3 block per neighbour; about 40 ns).
 pub const ROW: usize = TASK_NANOS / 40;
 
-/// The fewest rows a task of a smoothing sweep's colour gets (about 2.5 µs of work).
+/// The fewest rows a thread's share of a sweep's colour gets (a smoothing row is about 40 ns,
+/// a vertex step about 400: 2.5 to 25 µs of work). The threads of a sweep are awake from the
+/// colour before, so a share costs far less to hand over than `TASK_NANOS`.
 pub const COLOUR_ROWS: usize = 64;
 
 /// Vertices that gather their elements: forces, Hessians, energies, contacts (250 to 1,000 ns).
@@ -43,16 +45,6 @@ pub const fn blocks(grain: usize) -> usize {
     } else {
         1
     }
-}
-
-/// The grain of one colour of a Gauss–Seidel smoothing sweep of `len` rows: its share of each
-/// thread of the pool, but no fewer than `COLOUR_ROWS`. A colour is a barrier (the next reads
-/// what it writes), so a colour that splits into fewer tasks than there are threads leaves the
-/// rest idle until it ends, and the pool's threads are still awake from the colour before, so a
-/// hand-over costs far less than `TASK_NANOS`. On the cotton T-shirt (about 250 rows a colour,
-/// 10 µs) the fixed `ROW` grain ran every fine colour on one thread, a third of the substep.
-pub fn colour(len: usize) -> usize {
-    len.div_ceil(rayon::current_num_threads()).max(COLOUR_ROWS)
 }
 
 /// Whether a loop of `len` elements splits into tasks at `grain` (`with_min_len` halves a

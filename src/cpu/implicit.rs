@@ -122,8 +122,6 @@ pub struct Newton {
     pub scalars: PcgScalars,
     /// The line search's energy partials.
     pub energy: Vec<Vec4>,
-    /// A smoothing sweep's scratch: the colour's next corrections (`smooth`).
-    next: Vec<glam::Vec3>,
     /// The step length of each Newton step of the last substep.
     pub alphas: Vec<f32>,
 }
@@ -198,7 +196,6 @@ impl Vbd {
                 ap: vec![Vec4::ZERO; n],
                 scalars: PcgScalars::default(),
                 energy: vec![Vec4::ZERO; groups],
-                next: Vec::new(),
                 alphas: Vec::new(),
                 structure,
             }
@@ -309,14 +306,11 @@ impl Vbd {
             };
             match op {
                 SolveOp::Sweep { iteration } => {
-                    for colour in &self.colours {
-                        let sweep = Sweep {
-                            iteration,
-                            ..*colour
-                        };
-                        let (x, steps, next) = (&mut self.x, &mut self.steps, &mut self.next);
-                        vbd_solve(&s, &sweep, &self.order, x, steps, next);
+                    for colour in &mut self.colours {
+                        colour.iteration = iteration;
                     }
+                    let (x, steps, next) = (&mut self.x, &mut self.steps, &mut self.next);
+                    vbd_solve(&s, &self.colours, &self.order, x, steps, next);
                     self.iterations_run.0 += 1;
                     *swept += 1;
                 }
@@ -376,11 +370,9 @@ impl Newton {
             }
             SolveOp::Smooth { level: l, backward } => {
                 let a = &mut self.levels[l as usize];
-                let count = a.by_colour.colours();
-                for j in 0..count {
-                    let k = if backward { count - 1 - j } else { j };
-                    smooth(&a.by_colour, k, &a.rhs, &mut a.e, &mut self.next);
-                }
+                let m = &a.by_colour;
+                let colours = if backward { m.backward() } else { m.forward() };
+                smooth(m, colours, &a.rhs, &mut a.e);
             }
             SolveOp::BlockJacobi => {
                 let l0 = &mut self.levels[0];

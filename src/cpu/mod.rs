@@ -12,6 +12,7 @@ mod assemble;
 mod bending_forces;
 mod coarse_operator;
 mod collide_body;
+mod colour_run;
 mod contact_planes;
 mod deformed_body;
 mod force_residual;

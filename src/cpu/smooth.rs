@@ -1,10 +1,12 @@
 //! CPU twins of `kernels/smooth.wgsl` and `kernels/level_residual.wgsl`.
 
+use super::colour_run::{colour_after_colour, Cells};
 use super::grain;
 use super::vbd_solve::solve3;
 use crate::model::multigrid::BlockPattern;
 use glam::{Mat3, Mat3A, Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// A level's matrix with the rows of each colour side by side, for its Gauss–Seidel sweeps.
 ///
@@ -17,8 +19,6 @@ use rayon::prelude::*;
 pub struct ColourRows {
     /// The level's particles by colour: row s of the copy is particle `order[s]`.
     order: Vec<u32>,
-    /// Where each colour's rows start in `order` (colours + 1 entries).
-    colour_offsets: Vec<u32>,
     /// Each row's first block in the copy (rows + 1 entries).
     offsets: Vec<u32>,
     /// Each block's column (a particle).
@@ -27,6 +27,10 @@ pub struct ColourRows {
     source: Vec<u32>,
     /// The copy, diagonal block first in each row.
     blocks: Vec<Mat3>,
+    /// Each colour's rows, first colour first.
+    forward: Vec<Range<usize>>,
+    /// The same, last colour first.
+    backward: Vec<Range<usize>>,
 }
 
 impl ColourRows {
@@ -40,9 +44,13 @@ impl ColourRows {
             source.extend(start..end);
             offsets.push(columns.len() as u32);
         }
+        let forward: Vec<Range<usize>> = (colour_offsets.windows(2))
+            .map(|w| w[0] as usize..w[1] as usize)
+            .collect();
         ColourRows {
+            backward: forward.iter().rev().cloned().collect(),
+            forward,
             order: order.to_vec(),
-            colour_offsets: colour_offsets.to_vec(),
             offsets,
             columns,
             blocks: vec![Mat3::ZERO; source.len()],
@@ -57,43 +65,46 @@ impl ColourRows {
             .for_each(|(b, &s)| *b = blocks[s as usize]);
     }
 
-    /// The level's colours.
-    pub fn colours(&self) -> usize {
-        self.colour_offsets.len() - 1
+    /// The rows of every colour, first colour first: a forward sweep.
+    pub fn forward(&self) -> &[Range<usize>] {
+        &self.forward
+    }
+
+    /// The rows of every colour, last colour first: a backward sweep.
+    pub fn backward(&self) -> &[Range<usize>] {
+        &self.backward
+    }
+
+    /// The rows of colour `k` alone.
+    pub fn colour(&self, k: usize) -> &[Range<usize>] {
+        &self.forward[k..k + 1]
     }
 }
 
-/// One block Gauss–Seidel update of colour `colour` of a level's system A·e = r:
+/// Block Gauss–Seidel updates of a level's system A·e = r, colour after colour of `colours`
+/// (rows of the colour-ordered copy: `ColourRows::forward`, `backward` or `colour`):
 /// e_I = A_II⁻¹(r_I − Σ_J≠I A_IJ·e_J). Rows of one colour share no block, so they update at
-/// once from the same `e`: in place on one thread, or, for a colour long enough to split,
-/// computed in parallel into `next` (scratch, kept between calls) and then written. A row whose
+/// once from the same `e`, in place, split across the pool (`colour_after_colour`). A row whose
 /// diagonal is singular (a pinned particle, or a coarse one whose children are all pinned) gets
 /// e = 0.
-pub fn smooth(m: &ColourRows, colour: usize, rhs: &[Vec4], e: &mut [Vec4], next: &mut Vec<Vec3>) {
-    let update = |e: &[Vec4], s: usize| {
-        let (start, end) = (m.offsets[s] as usize, m.offsets[s + 1] as usize);
-        let mut sum = Vec3A::from_vec4(rhs[m.order[s] as usize]);
-        for b in start + 1..end {
-            sum -= block_times(m.blocks[b], e[m.columns[b] as usize]);
-        }
-        solve3(m.blocks[start], sum.into())
-    };
-    let rows = m.colour_offsets[colour] as usize..m.colour_offsets[colour + 1] as usize;
-    let grain = grain::colour(rows.len());
-    if !grain::splits(rows.len(), grain) {
-        // No row reads another of its colour, so updating in place gives the same numbers.
+pub fn smooth(m: &ColourRows, colours: &[Range<usize>], rhs: &[Vec4], e: &mut [Vec4]) {
+    let e = Cells::new(e);
+    colour_after_colour(colours, |_, rows| {
         for s in rows {
-            e[m.order[s] as usize] = update(e, s).extend(0.0);
+            let (start, end) = (m.offsets[s] as usize, m.offsets[s + 1] as usize);
+            let mut sum = Vec3A::from_vec4(rhs[m.order[s] as usize]);
+            for b in start + 1..end {
+                // SAFETY: column b is a particle of another colour (a colour's rows share no
+                // block), which no thread writes while this colour runs.
+                let other = unsafe { e.get(m.columns[b] as usize) };
+                sum -= block_times(m.blocks[b], other);
+            }
+            let update = solve3(m.blocks[start], sum.into()).extend(0.0);
+            // SAFETY: row s is written by this iteration alone, and read by no row of its
+            // colour.
+            unsafe { e.set(m.order[s] as usize, update) };
         }
-        return;
-    }
-    let now: &[Vec4] = e;
-    (rows.clone().into_par_iter().with_min_len(grain))
-        .map(|s| update(now, s))
-        .collect_into_vec(next);
-    for (s, v) in rows.zip(next.iter()) {
-        e[m.order[s] as usize] = v.extend(0.0);
-    }
+    });
 }
 
 /// A 3×3 block times a particle's vector, in SIMD lanes: the same products and sums in the same
@@ -190,18 +201,10 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            let (mut e, mut next) = (vec![Vec4::ZERO; n], Vec::new());
+            let mut e = vec![Vec4::ZERO; n];
             pool.install(|| {
-                let split = grain::splits(n / 2, grain::colour(n / 2));
-                assert_eq!(
-                    split,
-                    threads > 1,
-                    "a colour splits on more than one thread"
-                );
                 for _ in 0..2 {
-                    for colour in 0..2 {
-                        smooth(&rows, colour, &rhs, &mut e, &mut next);
-                    }
+                    smooth(&rows, rows.forward(), &rhs, &mut e);
                 }
             });
             let bits = |v: &[Vec4]| -> Vec<u32> {

@@ -6,11 +6,12 @@
 //! force (−gradient) and H its 3×3 Hessian block, D += H⁻¹f. Vertices of one colour share no
 //! element, so they update at once (one dispatch) without reading each other.
 
-use super::grain;
+use super::colour_run::{colour_after_colour, Cells};
 use super::implicit_terms::Implicit;
 use crate::model::layout::Sweep;
 use glam::{Mat3, Vec3, Vec4};
-use rayon::prelude::*;
+use std::ops::Range;
+use std::sync::atomic::{AtomicU32, Ordering};
 
 /// The vertex's Newton step H⁻¹f, unless it would end inside a body's contact layer (along
 /// the step's contact plane with normal n̂, body by body in scene order): then the step that
@@ -58,44 +59,69 @@ pub fn solve3(hess: Mat3, f: Vec3) -> Vec3 {
     Vec3::new(r0.dot(f), r1.dot(f), r2.dot(f)) / det
 }
 
-/// One sweep: every free vertex of the colour takes its Newton step, in place, and the
-/// sweep's iteration records the largest step length in `steps` (m).
+/// One sweep over `colours` (colour after colour): every free vertex takes its Newton step,
+/// in place, and the sweep's iteration records the largest step length in `steps` (m).
 ///
-/// A vertex's system reads only itself and vertices of other colours, so the colour's steps
-/// are computed in parallel from the same `x` into `next` (scratch, one entry per vertex of
-/// the colour: its next displacement and step length, `None` when pinned; kept between calls
-/// so that a sweep allocates nothing) and then written: the same numbers as one vertex after
+/// A vertex's system reads only itself and vertices of other colours, so a colour's steps are
+/// computed in parallel from the same `x` into `next` (scratch, one entry per entry of `order`:
+/// the vertex's next displacement and step length, `None` when pinned; kept between calls so
+/// that a sweep allocates little) and then written, each colour one parallel phase of the
+/// sweep (`colour_after_colour`) and its writes the next: the same numbers as one vertex after
 /// another, on any number of threads (the largest of them too).
 pub fn vbd_solve(
     s: &Implicit,
-    sweep: &Sweep,
+    colours: &[Sweep],
     order: &[u32],
     x: &mut [Vec4],
     steps: &mut [f32],
     next: &mut Vec<Option<(Vec4, f32)>>,
 ) {
-    let iteration = sweep.iteration as usize;
-    let colour = &order[sweep.first as usize..(sweep.first + sweep.count) as usize];
-    let x_now: &[Vec4] = x;
-    colour
-        .par_iter()
-        .with_min_len(grain::VERTEX)
-        .map(|&i| {
-            let i = i as usize;
-            let w = s.prev[i].w;
-            if w == 0.0 {
-                return None;
-            }
-            let sys = s.vertex_system(i, x_now, None, &mut |_, _| {});
-            let d = x_now[i].truncate();
-            let delta = newton_step(s, i, d, sys.force, sys.hessian);
-            Some(((d + delta).extend(w), delta.length()))
+    let Some(iteration) = colours.first().map(|c| c.iteration as usize) else {
+        return;
+    };
+    next.resize(order.len(), None);
+    // Each colour twice: its steps, then their writes.
+    let phases: Vec<Range<usize>> = (colours.iter())
+        .flat_map(|c| {
+            let rows = c.first as usize..(c.first + c.count) as usize;
+            [rows.clone(), rows]
         })
-        .collect_into_vec(next);
-    for (&i, update) in colour.iter().zip(next.iter()) {
-        if let Some((moved, len)) = *update {
-            x[i as usize] = moved;
-            steps[iteration] = steps[iteration].max(len);
+        .collect();
+    let (x, next) = (Cells::new(x), Cells::new(next));
+    let longest = AtomicU32::new(0);
+    colour_after_colour(&phases, |phase, rows| {
+        if phase % 2 == 0 {
+            // SAFETY: nothing writes `x` during a colour's steps (its writes are the next
+            // phase), and each entry of `next` belongs to one row.
+            let x_now = unsafe { x.as_slice() };
+            for r in rows {
+                unsafe { next.set(r, vertex_step(s, order[r] as usize, x_now)) };
+            }
+        } else {
+            let mut most = 0.0f32;
+            for r in rows {
+                // SAFETY: row r's vertex is written by this row alone, and no colour's steps
+                // run while the writes do.
+                if let Some((moved, len)) = unsafe { next.get(r) } {
+                    unsafe { x.set(order[r] as usize, moved) };
+                    most = most.max(len);
+                }
+            }
+            // Lengths are not negative, so their bits order as the numbers do.
+            longest.fetch_max(most.to_bits(), Ordering::Relaxed);
         }
+    });
+    steps[iteration] = steps[iteration].max(f32::from_bits(longest.into_inner()));
+}
+
+/// Vertex `i`'s next displacement and step length (`None` when pinned).
+fn vertex_step(s: &Implicit, i: usize, x: &[Vec4]) -> Option<(Vec4, f32)> {
+    let w = s.prev[i].w;
+    if w == 0.0 {
+        return None;
     }
+    let sys = s.vertex_system(i, x, None, &mut |_, _| {});
+    let d = x[i].truncate();
+    let delta = newton_step(s, i, d, sys.force, sys.hessian);
+    Some(((d + delta).extend(w), delta.length()))
 }

@@ -107,12 +107,12 @@ pub(crate) fn check_level_op(
             }));
             let mut rows = cpu::ColourRows::new(pattern(l), &colours.concat(), &offsets);
             rows.fill(&a.blocks);
-            let mut next = Vec::new();
-            let mut run = |k: usize| cpu::smooth(&rows, k, &a.rhs, &mut a.e, &mut next);
-            match backward {
-                false => (0..colours.len()).for_each(&mut run),
-                true => (0..colours.len()).rev().for_each(&mut run),
-            }
+            let sweep = if backward {
+                rows.backward()
+            } else {
+                rows.forward()
+            };
+            cpu::smooth(&rows, sweep, &a.rhs, &mut a.e);
             // A row's update A_rr⁻¹(rhs_r − Σ A_rc·e_c) rounds a few times relative to the
             // largest correction (the blocks are diagonally dominant, so the sum over A_rr is at
             // most that); later colours pass earlier differences on, undamped at most.
