@@ -9,9 +9,9 @@ use drapekit::gpu::implicit::layout::SolveScalars;
 use drapekit::gpu::implicit::SolveArray;
 use drapekit::gpu::GpuSolver;
 use drapekit::model::layout::SubstepParams;
-use drapekit::model::multigrid::Multigrid;
+use drapekit::model::multigrid::{BlockPattern, Multigrid};
 use drapekit::plan::SolveOp;
-use glam::{Mat3, Vec4};
+use glam::{Mat3, Vec3, Vec4};
 /// One level's arrays of the Newton step's linear system on the CPU.
 #[derive(Clone)]
 pub(crate) struct Level {
@@ -98,7 +98,7 @@ pub(crate) fn check_level_op(
     let (out, l, bound) = match op {
         SolveOp::Smooth { level, backward } => {
             let l = level as usize;
-            let colours = colours(mg, fine, l);
+            let mut colours = colours(mg, fine, l);
             let a = &mut lv[l];
             let mut offsets = vec![0u32];
             offsets.extend(colours.iter().scan(0, |end, c| {
@@ -112,12 +112,15 @@ pub(crate) fn check_level_op(
             } else {
                 rows.forward()
             };
+            let before = a.e.clone();
             cpu::smooth(&rows, sweep, &a.rhs, &mut a.e);
-            // A row's update A_rr⁻¹(rhs_r − Σ A_rc·e_c) rounds a few times relative to the
-            // largest correction (the blocks are diagonally dominant, so the sum over A_rr is at
-            // most that); later colours pass earlier differences on, undamped at most.
-            let bound = 8.0 * EPS * max_norm(&a.e) * colours.len() as f32;
-            (SolveArray::LevelCorrection(level), l, bound)
+            if backward {
+                colours.reverse();
+            }
+            let bounds = smoothing_bounds(pattern(l), &a.blocks, &colours, &a.rhs, &before, &a.e);
+            let got = g.solve_array(SolveArray::LevelCorrection(level)).unwrap();
+            within_rows(&format!("{op:?}"), &got, &a.e, &bounds);
+            return;
         }
         SolveOp::Residual { level } => {
             let l = level as usize;
@@ -191,6 +194,112 @@ pub(crate) fn check_level_op(
         _ => &lv[l].res,
     };
     within(&format!("{op:?}"), max_abs_diff(&got, want), bound);
+}
+
+/// Per row, how far the GPU's and the CPU's Gauss–Seidel sweep over `colours` (in sweep
+/// order) can end apart, from the arrays themselves (no assumption on the matrix): a row's
+/// update x = A_II⁻¹·s with s = r_I − Σ_J A_IJ·e_J rounds in s (3k + 1 terms over its k blocks:
+/// (3k + 1)·ε of |r_I| + Σ|A_IJ|·|e_J|, carried through |A_II⁻¹|) and in the adjugate solve
+/// (cofactors 2 roundings, their dot products with s and with a column 3 more, the division
+/// 2.5 ULP as WGSL allows: 5ε of |adj|·|s| and of |x|·|c₀|·|adj₀|, over |det|, plus 5ε of |x|);
+/// each backend within that of the exact update of its own inputs, so twice it, plus
+/// |A_II⁻¹|·Σ|A_IJ|·d_J for rows J that this sweep updated before (their difference d_J;
+/// rows not yet updated are the same uploaded values).
+fn smoothing_bounds(
+    pattern: &BlockPattern,
+    blocks: &[Mat3],
+    colours: &[Vec<u32>],
+    rhs: &[Vec4],
+    before: &[Vec4],
+    after: &[Vec4],
+) -> Vec<Vec3> {
+    let mut d = vec![Vec3::ZERO; rhs.len()];
+    let mut updated = vec![false; rhs.len()];
+    for colour in colours {
+        let mut next = Vec::with_capacity(colour.len());
+        for &r in colour {
+            let r = r as usize;
+            let (start, end) = (pattern.offsets[r] as usize, pattern.offsets[r + 1] as usize);
+            let mut magnitude = rhs[r].truncate().abs();
+            let mut carried = Vec3::ZERO;
+            for b in start + 1..end {
+                let c = pattern.columns[b] as usize;
+                let (e, dc) = match updated[c] {
+                    true => (after[c].truncate().abs() + d[c], d[c]),
+                    false => (before[c].truncate().abs(), Vec3::ZERO),
+                };
+                magnitude += abs_block(blocks[b]) * e;
+                carried += abs_block(blocks[b]) * dc;
+            }
+            let terms = (3 * (end - start - 1) + 1) as f32;
+            let diagonal = blocks[start];
+            let det = diagonal.determinant();
+            if det.abs() < 1e-30 {
+                // Both sides return zero for a singular diagonal.
+                next.push((r, Vec3::ZERO));
+                continue;
+            }
+            let inverse = abs_block(diagonal.inverse());
+            let x = after[r].truncate().abs();
+            let (c0, c1, c2) = (
+                diagonal.x_axis.abs(),
+                diagonal.y_axis.abs(),
+                diagonal.z_axis.abs(),
+            );
+            let adjugate_rows =
+                Mat3::from_cols(abs_cross(c1, c2), abs_cross(c2, c0), abs_cross(c0, c1))
+                    .transpose();
+            let det_magnitude = c0.dot(abs_cross(c1, c2));
+            let s = magnitude;
+            let solve =
+                5.0 * EPS * (adjugate_rows * s + x * det_magnitude) / det.abs() + 5.0 * EPS * x;
+            let rounding = inverse * (terms * EPS * magnitude) + solve;
+            next.push((r, 2.0 * rounding + inverse * carried));
+        }
+        for (r, bound) in next {
+            d[r] = bound;
+            updated[r] = true;
+        }
+    }
+    d
+}
+
+/// |a|·|b|'s cross product: each component's two products by magnitude, summed.
+fn abs_cross(a: Vec3, b: Vec3) -> Vec3 {
+    Vec3::new(
+        a.y * b.z + a.z * b.y,
+        a.z * b.x + a.x * b.z,
+        a.x * b.y + a.y * b.x,
+    )
+}
+
+fn abs_block(m: Mat3) -> Mat3 {
+    Mat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs())
+}
+
+/// Every row of `got` within its bound of `want`, component by component.
+fn within_rows(what: &str, got: &[Vec4], want: &[Vec4], bounds: &[Vec3]) {
+    let mut worst = (0.0f32, 0.0f32, 0.0f32);
+    for ((g, w), b) in got.iter().zip(want).zip(bounds) {
+        let diff = (g.truncate() - w.truncate()).abs();
+        for k in 0..3 {
+            let ratio = if diff[k] == 0.0 { 0.0 } else { diff[k] / b[k] };
+            if ratio > worst.0 || ratio.is_nan() {
+                worst = (ratio, diff[k], b[k]);
+            }
+        }
+    }
+    let largest = bounds.iter().map(|b| b.max_element()).fold(0.0, f32::max);
+    eprintln!(
+        "  {what}: worst row {:.2e} of its bound {:.2e} ({:.2}x; largest row bound {largest:.2e})",
+        worst.1, worst.2, worst.0
+    );
+    assert!(
+        worst.0 <= 1.0,
+        "{what}: a row differs by {}, bound {}",
+        worst.1,
+        worst.2
+    );
 }
 
 /// A level's colours, each its rows in order (the fine level's: the model's vertex colours).
