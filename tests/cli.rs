@@ -420,37 +420,55 @@ fn plan_names_what_limits_the_substep() {
     }
 }
 
-#[test]
-fn tshirt_drape_cotton_sews_rests_and_stays_out_of_the_body() {
-    // Woven cotton at its measured stiffness, implicit Euler at 8 substeps of one Newton step a
-    // frame, the strain limiter off, run whole on the CPU path: sewn, then gravity, then the
-    // settle rule (speed and force residual) stops it.
-    let out = out_dir("tshirt_drape_cotton");
+/// Runs the shipped scene `fixtures/scenes/{scene}.toml` whole on the CPU path: its output
+/// folder and its summary.
+fn run_on_cpu(scene: &str) -> (PathBuf, serde_json::Value) {
+    let out = out_dir(scene);
+    let path = common::fixture(&format!("scenes/{scene}.toml"));
     let r = drapekit(&[
         "run",
-        common::fixture("scenes/tshirt_drape_cotton.toml")
-            .to_str()
-            .unwrap(),
+        path.to_str().unwrap(),
         "--backend",
         "cpu",
         "--out",
         out.to_str().unwrap(),
     ]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    (out, serde_json::from_str(&text).unwrap())
+}
+
+/// A garment run by implicit Euler with the strain limiter off has come to rest (speed and
+/// force residual), sewn, and outside the body.
+fn assert_rests_sewn_outside_the_body(scene: &str, summary: &serde_json::Value) {
     let f = |key: &str| summary[key].as_f64().unwrap_or(f64::NAN);
-    assert_eq!(summary["integrator"], "implicit");
+    assert_eq!(summary["integrator"], "implicit", "{scene}");
     assert!(
         summary["strain_limit"].is_null(),
-        "the cap must be off: {summary:#}"
+        "{scene}: the cap must be off"
     );
-    assert!(summary["settled"].is_object(), "not settled: {summary:#}");
+    assert!(
+        summary["settled"].is_object(),
+        "{scene} not settled: {summary:#}"
+    );
     // Settled means the solve balanced the forces, not only that the cloth slowed down.
-    assert!(f("force_residual_rms") <= 0.05, "{summary:#}");
-    assert_eq!(summary["seams_closed"], summary["seams"], "{summary:#}");
+    assert!(f("force_residual_rms") <= 0.05, "{scene}: {summary:#}");
+    assert_eq!(
+        summary["seams_closed"], summary["seams"],
+        "{scene}: {summary:#}"
+    );
     // The collision thickness is 3 mm; particles are measured against the exact mesh.
-    assert!(f("max_penetration_m") <= 0.003, "{summary:#}");
+    assert!(f("max_penetration_m") <= 0.003, "{scene}: {summary:#}");
+}
+
+#[test]
+fn tshirt_drape_cotton_sews_rests_and_stays_out_of_the_body() {
+    // Woven cotton at its measured stiffness, implicit Euler at 8 substeps of one Newton step a
+    // frame, the strain limiter off, run whole on the CPU path: sewn, then gravity, then the
+    // settle rule (speed and force residual) stops it.
+    let (out, summary) = run_on_cpu("tshirt_drape_cotton");
+    assert_rests_sewn_outside_the_body("tshirt_drape_cotton", &summary);
+    let f = |key: &str| summary[key].as_f64().unwrap_or(f64::NAN);
     // Woven cotton carries a draped shirt's few N/m at a fraction of a percent of strain: 99% of
     // the edges must rest under 2%. The few most stretched edges sit where the pattern is tight
     // on the mannequin; symplectic Euler at its stable step (the converged reference, 2,249
@@ -478,36 +496,8 @@ fn membrane_skirts_on_the_straight_grain_and_the_bias_rest_sewn_at_their_thread_
     // and the skirt slides a few centimetres down before it rests: it must rest all the same.
     // (Measured: settled at frames 66 and 194 of 144 and 240.)
     for scene in ["skirt_straight_grain", "skirt_bias_cut"] {
-        let out = out_dir(scene);
-        let r = drapekit(&[
-            "run",
-            common::fixture(&format!("scenes/{scene}.toml"))
-                .to_str()
-                .unwrap(),
-            "--backend",
-            "cpu",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-        let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
-        let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
-        let f = |key: &str| summary[key].as_f64().unwrap_or(f64::NAN);
-        assert!(
-            summary["strain_limit"].is_null(),
-            "{scene}: the cap must be off"
-        );
-        assert!(
-            summary["settled"].is_object(),
-            "{scene} not settled: {summary:#}"
-        );
-        assert!(f("force_residual_rms") <= 0.05, "{scene}: {summary:#}");
-        assert_eq!(
-            summary["seams_closed"], summary["seams"],
-            "{scene}: {summary:#}"
-        );
-        // The collision thickness is 3 mm; particles are measured against the exact mesh.
-        assert!(f("max_penetration_m") <= 0.003, "{scene}: {summary:#}");
+        let (_, summary) = run_on_cpu(scene);
+        assert_rests_sewn_outside_the_body(scene, &summary);
         // Strain along the threads, the membrane's own measure (an edge across the grain also
         // stretches under shear): a skirt's weight is a few N/m against 4,000 N/m, so it rests
         // under 2% (measured: 1.85% and 1.08% largest).
