@@ -222,14 +222,17 @@ fn smoothing_bounds(
             let (start, end) = (pattern.offsets[r] as usize, pattern.offsets[r + 1] as usize);
             let mut magnitude = rhs[r].truncate().abs();
             let mut carried = Vec3::ZERO;
-            for b in start + 1..end {
-                let c = pattern.columns[b] as usize;
+            let others = pattern.columns[start + 1..end]
+                .iter()
+                .zip(&blocks[start + 1..end]);
+            for (&c, &block) in others {
+                let c = c as usize;
                 let (e, dc) = match updated[c] {
                     true => (after[c].truncate().abs() + d[c], d[c]),
                     false => (before[c].truncate().abs(), Vec3::ZERO),
                 };
-                magnitude += abs_block(blocks[b]) * e;
-                carried += abs_block(blocks[b]) * dc;
+                magnitude += abs_block(block) * e;
+                carried += abs_block(block) * dc;
             }
             let terms = (3 * (end - start - 1) + 1) as f32;
             let diagonal = blocks[start];
