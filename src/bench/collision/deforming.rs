@@ -101,30 +101,15 @@ pub fn row(
     samples: usize,
     repeats: usize,
 ) -> CollisionRow {
+    let note = "deforming body: rebuilt over the deformed mesh each substep; timed: rebuild and \
+                a query per particle (the response is not run: substep = the plan less collision \
+                plus this)";
     CollisionRow {
-        scale: 1,
-        particles,
-        body_triangles: triangles,
-        contender,
-        device: String::new(),
         samples,
         repeats,
-        window_substeps: 0,
-        collision_us: 0.0,
-        in_run_us: 0.0,
-        substep_us: 0.0,
-        contacts: 0,
-        exact_contacts: 0,
-        missed: 0,
-        extra: 0,
         // Not run through a solver: what its response leaves inside is not measured.
         max_penetration: f32::NAN,
         max_edge_penetration: f32::NAN,
-        build_s: 0.0,
-        memory_bytes: 0,
-        note: "deforming body: rebuilt over the deformed mesh each substep; timed: rebuild \
-               and a query per particle (the response is not run: substep = the plan less \
-               collision plus this)"
-            .into(),
+        ..CollisionRow::new(contender, particles, triangles, note.into())
     }
 }

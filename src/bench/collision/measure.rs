@@ -434,26 +434,17 @@ pub fn measure(
             repeats,
             window,
             row: CollisionRow {
-                scale: 1,
-                particles: prep.model.len(),
-                body_triangles: collider.body.mesh.triangles.len(),
-                contender: b.contender,
-                device: String::new(),
                 samples: samples.len(),
                 repeats,
                 window_substeps: window,
-                collision_us: 0.0,
-                in_run_us: 0.0,
-                substep_us: 0.0,
-                contacts: 0,
-                exact_contacts: 0,
-                missed: 0,
-                extra: 0,
-                max_penetration: 0.0,
-                max_edge_penetration: 0.0,
                 build_s: b.build_s,
                 memory_bytes: b.memory_bytes,
-                note: note(b.contender),
+                ..CollisionRow::new(
+                    b.contender,
+                    prep.model.len(),
+                    collider.body.mesh.triangles.len(),
+                    note(b.contender),
+                )
             },
         });
     }

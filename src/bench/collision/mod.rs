@@ -168,6 +168,37 @@ pub struct CollisionRow {
 }
 
 impl CollisionRow {
+    /// A row at scale 1 with nothing measured yet (the measurements add up over the samples).
+    pub fn new(
+        contender: Contender,
+        particles: usize,
+        body_triangles: usize,
+        note: String,
+    ) -> Self {
+        CollisionRow {
+            scale: 1,
+            particles,
+            body_triangles,
+            contender,
+            device: String::new(),
+            samples: 0,
+            repeats: 0,
+            window_substeps: 0,
+            collision_us: 0.0,
+            in_run_us: 0.0,
+            substep_us: 0.0,
+            contacts: 0,
+            exact_contacts: 0,
+            missed: 0,
+            extra: 0,
+            max_penetration: 0.0,
+            max_edge_penetration: 0.0,
+            build_s: 0.0,
+            memory_bytes: 0,
+            note,
+        }
+    }
+
     /// The collision stage's share of a whole substep in the contender's own run, in %.
     pub fn share_percent(&self) -> f64 {
         100.0 * self.in_run_us / self.substep_us
