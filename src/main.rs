@@ -277,13 +277,18 @@ fn main() -> ExitCode {
     // started there queues its tasks where the pool's other threads take them and the thread
     // takes part, where one started from outside wakes a thread and sleeps until it ends, a
     // hand-over the implicit solve pays thousands of times a frame (the cotton T-shirt: about
-    // 5% faster). The pool's threads get the main thread's stack size.
+    // 5% faster). The pool's threads get the main thread's stack size. Not `batch`: its jobs
+    // are threads of their own whose loops need the pool, and a pool thread waiting for them
+    // would leave them one thread fewer (on a one-thread pool, none).
     rayon::ThreadPoolBuilder::new()
         .num_threads(cli.threads.unwrap_or(0) as usize)
         .stack_size(8 << 20)
         .build_global()
         .expect("the global thread pool is built only here");
-    let result = rayon::scope(|_| execute(cli.command));
+    let result = match cli.command {
+        command @ Command::Batch(_) => execute(command),
+        command => rayon::scope(|_| execute(command)),
+    };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

@@ -586,3 +586,42 @@ fn an_items_bad_input_is_located_in_the_file_that_holds_the_key() {
         "{cap}"
     );
 }
+
+#[test]
+fn a_batch_on_a_one_thread_pool_finishes() {
+    // Each job is a thread of its own whose parallel loops run on rayon's pool; had the batch
+    // itself waited on a thread of a one-thread pool, those loops would never start. A 40 × 40
+    // sheet is large enough for its loops to split.
+    let dir = workdir("one-thread");
+    write_scene(&dir, "sheet.toml", 4);
+    let manifest = dir.join("m.jsonl");
+    std::fs::write(
+        &manifest,
+        r#"{"id": "sheet", "scene": "scenes/sheet.toml", "overrides": {"cloth": {"grid": {"columns": 40, "rows": 40}}}}"#,
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let mut child = drapekit()
+        .args(["--threads", "1", "batch"])
+        .arg(&manifest)
+        .arg("--out")
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // The item takes well under a second; a minute is a hang, not a slow machine.
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if std::time::Instant::now() > deadline {
+            child.kill().unwrap();
+            panic!("a batch on one thread did not finish within a minute");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    assert!(status.success());
+    assert_eq!(summaries(&out).len(), 1);
+}
