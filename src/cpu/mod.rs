@@ -5,7 +5,8 @@
 //! only its own result from reads of the previous arrays and summing its elements in a fixed
 //! order: no atomics, and the same bits on any number of threads (`tests/threads.rs`). They run
 //! on the caller's rayon pool (`--threads`), in tasks of at least a grain of work each
-//! (`grain`), so that a short loop runs on the calling thread. The spatial-hash build (a
+//! (`grain`), so that a short loop runs on the calling thread; a Gauss–Seidel sweep runs all
+//! its colours in one parallel region (`colour_run`). The spatial-hash build (a
 //! scatter) and the point–triangle self-collision reference (Gauss–Seidel) stay serial.
 
 mod assemble;
