@@ -272,14 +272,15 @@ fn main() -> ExitCode {
         std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir());
     }
     let cli = Cli::parse();
-    // The CPU stages run on rayon's global pool, sized once, before any of them runs (0: one
-    // thread per core). The command itself runs on a thread of the pool: a parallel loop
-    // started there queues its tasks where the pool's other threads take them and the thread
-    // takes part, where one started from outside wakes a thread and sleeps until it ends, a
-    // hand-over the implicit solve pays thousands of times a frame (the cotton T-shirt: about
-    // 5% faster). The pool's threads get the main thread's stack size. Not `batch`: its jobs
-    // are threads of their own whose loops need the pool, and a pool thread waiting for them
-    // would leave them one thread fewer (on a one-thread pool, none).
+    // The CPU stages run on rayon's global pool, sized once, before any of them runs (without
+    // --threads: RAYON_NUM_THREADS, else one thread per logical CPU). The command itself runs
+    // on a thread of the pool: a parallel loop started there queues its tasks where the pool's
+    // other threads take them and the thread takes part, where one started from outside wakes
+    // a thread and sleeps until it ends, a hand-over the implicit solve pays thousands of times
+    // a frame (the cotton T-shirt: about 5% faster). Not `batch`: its jobs are threads of their
+    // own whose loops need the pool, and a pool thread waiting for them would leave them one
+    // thread fewer (on a one-thread pool, none). The pool's threads get 8 MiB stacks, as a
+    // main thread usually has.
     rayon::ThreadPoolBuilder::new()
         .num_threads(cli.threads.unwrap_or(0) as usize)
         .stack_size(8 << 20)

@@ -4,14 +4,17 @@
 //! colour splits across threads, but the next colour must wait for all of it. Started as one
 //! parallel loop per colour, every colour paid for a task hand-over and, from outside the pool,
 //! for waking a thread and being woken: on the cotton T-shirt (about 250 rows a colour, 10 µs
-//! of work) a sweep on two threads took as long as on one. Here the threads of the pool claim
-//! the sweep's chunks in order from one counter, and a chunk waits (spinning, then yielding)
-//! only until every chunk of the colours before it has finished: one region per sweep.
+//! of work) a sweep on two threads took as long as on one. Here a sweep is one region: its
+//! participants go through the colours together, each colour split into a share per thread; a
+//! participant that has taken every share of a colour it can waits (spinning, then yielding)
+//! until the shares of that colour are finished, then goes on to the next.
 //!
-//! Nothing can deadlock: a chunk waits only for chunks with smaller numbers, which threads have
-//! already claimed and are running; a thread of the pool that never joins simply leaves its
-//! chunks to the others. Every row is computed from the same values whatever thread runs it,
-//! so a sweep gives the same bits on any number of threads.
+//! Nothing can deadlock: a participant waits only for shares that other participants have
+//! taken and are computing, and `run` must not start rayon work of its own (a thread waiting
+//! in it could pick up another participant of the same sweep, which would wait for the share
+//! that thread holds). A thread of the pool that never joins simply leaves its shares to the
+//! others. Every row is computed from the same values whatever thread runs it, so a sweep gives
+//! the same bits on any number of threads.
 
 use super::grain;
 use std::cell::UnsafeCell;
@@ -20,14 +23,16 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 /// Runs `run(k, rows)` on every row of `colours` (row ranges, colour k the k-th given): the
 /// rows of a colour after every row of the colours before it, the rows of one colour in any order, on any
-/// thread. A colour splits into up to one chunk per thread of at least `grain::COLOUR_ROWS`
-/// rows; on one thread, or when no colour is long enough to split, it is a plain loop on the
-/// calling thread.
+/// thread. A colour splits into up to one chunk per thread of about `grain::COLOUR_ROWS` rows
+/// or more; on one thread, or when no colour is long enough to split, it is a plain loop on
+/// the calling thread. `run` must not start rayon work (see the module's notes).
 ///
 /// Participant p takes the p-th chunk of every colour when it gets there first, then any
-/// chunk nobody has taken: the same thread meets the same rows (and, the rows of a colour
-/// being in particle order, mostly the same neighbourhood of the mesh) sweep after sweep, so
-/// that they stay in its cache, and a participant that starts late loses nothing.
+/// chunk nobody has taken. Participant 0 is the calling thread and the others are usually
+/// taken by the same threads of the pool from one sweep to the next, so a thread mostly meets
+/// the same rows (and, the rows of a colour being in particle order, mostly the same part of
+/// the mesh) sweep after sweep, where they are still in its cache; a participant that starts
+/// late loses nothing.
 pub fn colour_after_colour(colours: &[Range<usize>], run: impl Fn(usize, Range<usize>) + Sync) {
     let threads = rayon::current_num_threads();
     let parallel = (colours.iter())

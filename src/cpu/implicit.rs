@@ -200,8 +200,14 @@ impl Vbd {
                 structure,
             }
         });
+        let elements = Arc::new(Elements::new(model));
+        // What makes a sweep's colour a set of independent updates (`vbd_solve`); one pass.
+        assert!(
+            elements.view().separated_by(&coloring.color_of),
+            "the vertex colouring leaves an element with two vertices of one colour"
+        );
         Vbd {
-            elements: Arc::new(Elements::new(model)),
+            elements,
             colours: coloring.sweeps(1),
             order: coloring.order,
             schedule,
@@ -306,11 +312,9 @@ impl Vbd {
             };
             match op {
                 SolveOp::Sweep { iteration } => {
-                    for colour in &mut self.colours {
-                        colour.iteration = iteration;
-                    }
                     let (x, steps, next) = (&mut self.x, &mut self.steps, &mut self.next);
-                    vbd_solve(&s, &self.colours, &self.order, x, steps, next);
+                    let sweep = (&self.colours[..], iteration, &self.order[..]);
+                    vbd_solve(&s, sweep, x, steps, next);
                     self.iterations_run.0 += 1;
                     *swept += 1;
                 }

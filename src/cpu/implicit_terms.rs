@@ -65,6 +65,47 @@ pub struct VbdElements<'a> {
     pub membranes: Option<(&'a [u32], &'a [u32], &'a [Membrane])>,
 }
 
+impl VbdElements<'_> {
+    /// Whether no element joins two vertices of one colour (`colour` of each vertex): what a
+    /// Vertex Block Descent sweep needs to update a colour's vertices at once, each reading
+    /// only vertices of other colours.
+    pub fn separated_by(&self, colour: &[u32]) -> bool {
+        let mut apart = true;
+        for i in 0..colour.len() {
+            let mut meets = |j: u32| apart &= j as usize == i || colour[j as usize] != colour[i];
+            let (offsets, springs) = self.springs;
+            springs[incident(offsets, i)]
+                .iter()
+                .for_each(|s| meets(s.other));
+            if let Some((offsets, refs, hinges)) = self.hinges {
+                for &r in &refs[incident(offsets, i)] {
+                    hinges[(r / 4) as usize].v.iter().for_each(|&j| meets(j));
+                }
+            }
+            if let Some((offsets, refs, seams)) = self.seams {
+                for &r in &refs[incident(offsets, i)] {
+                    seams[(r / 4) as usize].v[..3]
+                        .iter()
+                        .for_each(|&j| meets(j));
+                }
+            }
+            if let Some((offsets, refs, membranes)) = self.membranes {
+                for &r in &refs[incident(offsets, i)] {
+                    membranes[(r / 4) as usize].v[..3]
+                        .iter()
+                        .for_each(|&j| meets(j));
+                }
+            }
+        }
+        apart
+    }
+}
+
+/// The entries of vertex `i` in a per-vertex list with `offsets`.
+fn incident(offsets: &[u32], i: usize) -> std::ops::Range<usize> {
+    offsets[i] as usize..offsets[i + 1] as usize
+}
+
 /// What every implicit stage reads: the step, the state at its start, the elements and the
 /// contact planes.
 pub struct Implicit<'a> {

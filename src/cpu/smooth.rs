@@ -36,7 +36,33 @@ pub struct ColourRows {
 impl ColourRows {
     /// The copy's structure for the level of block pattern `pattern`, whose particles `order`
     /// lists colour after colour, colour k from `colour_offsets[k]`.
+    ///
+    /// Panics unless `order` lists every row once, each row's first block is its diagonal, and
+    /// no row has a block in a column of its own colour: what lets `smooth` update a colour's
+    /// rows at once, in place, on any number of threads.
     pub fn new(pattern: &BlockPattern, order: &[u32], colour_offsets: &[u32]) -> ColourRows {
+        let rows = pattern.offsets.len() - 1;
+        let mut colour = vec![u32::MAX; rows];
+        for (k, w) in colour_offsets.windows(2).enumerate() {
+            for &r in &order[w[0] as usize..w[1] as usize] {
+                assert_eq!(colour[r as usize], u32::MAX, "row {r} is listed twice");
+                colour[r as usize] = k as u32;
+            }
+        }
+        assert_eq!(order.len(), rows, "every row is listed once");
+        for r in 0..rows {
+            let blocks =
+                &pattern.columns[pattern.offsets[r] as usize..pattern.offsets[r + 1] as usize];
+            assert_eq!(
+                blocks.first(),
+                Some(&(r as u32)),
+                "row {r} starts with its diagonal"
+            );
+            assert!(
+                (blocks[1..].iter()).all(|&c| colour[c as usize] != colour[r]),
+                "row {r} has a block in its own colour"
+            );
+        }
         let (mut offsets, mut columns, mut source) = (vec![0u32], Vec::new(), Vec::new());
         for &r in order {
             let (start, end) = (pattern.offsets[r as usize], pattern.offsets[r as usize + 1]);
@@ -169,6 +195,17 @@ mod tests {
             .map(|i| Vec4::new(wobble(i), -wobble(i + 1), 1.0, 0.0))
             .collect();
         (BlockPattern { offsets, columns }, blocks, rhs)
+    }
+
+    #[test]
+    #[should_panic(expected = "has a block in its own colour")]
+    fn a_colour_whose_rows_read_each_other_is_refused() {
+        // A chain coloured in two halves: neighbours inside each half share a colour, so an
+        // update in place would read a row that another thread is writing.
+        let n = 8;
+        let (pattern, _, _) = chain(n);
+        let order: Vec<u32> = (0..n as u32).collect();
+        ColourRows::new(&pattern, &order, &[0, 4, 8]);
     }
 
     #[test]

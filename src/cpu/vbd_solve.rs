@@ -1,5 +1,5 @@
-//! CPU twin of `kernels/vbd_solve.wgsl`: one Vertex Block Descent sweep (Chen, Macklin et al.,
-//! SIGGRAPH 2024) over the vertices of one colour.
+//! CPU twin of `kernels/vbd_solve.wgsl`: a Vertex Block Descent sweep (Chen, Macklin et al.,
+//! SIGGRAPH 2024), colour after colour (the kernel runs one colour a dispatch).
 //!
 //! Backward Euler is the minimisation of the incremental potential G (`implicit_terms`). Each
 //! vertex takes one Newton step on G with every other vertex held fixed: with f the vertex's
@@ -59,8 +59,9 @@ pub fn solve3(hess: Mat3, f: Vec3) -> Vec3 {
     Vec3::new(r0.dot(f), r1.dot(f), r2.dot(f)) / det
 }
 
-/// One sweep over `colours` (colour after colour): every free vertex takes its Newton step,
-/// in place, and the sweep's iteration records the largest step length in `steps` (m).
+/// One sweep over `colours` (colour after colour; the rows of `order` they name): every free
+/// vertex takes its Newton step, in place, and the sweep's `iteration` records the largest step
+/// length in `steps` (m).
 ///
 /// A vertex's system reads only itself and vertices of other colours, so a colour's steps are
 /// computed in parallel from the same `x` into `next` (scratch, one entry per entry of `order`:
@@ -68,17 +69,26 @@ pub fn solve3(hess: Mat3, f: Vec3) -> Vec3 {
 /// that a sweep allocates little) and then written, each colour one parallel phase of the
 /// sweep (`colour_after_colour`) and its writes the next: the same numbers as one vertex after
 /// another, on any number of threads (the largest of them too).
+///
+/// That every vertex reads only vertices of other colours is the colouring's promise
+/// (`VbdElements::separated_by`, checked when the solver is built); the phases keep the sweep
+/// free of data races whatever the colouring, as long as `order` names no vertex twice
+/// (checked here: two rows writing one vertex at once).
 pub fn vbd_solve(
     s: &Implicit,
-    colours: &[Sweep],
-    order: &[u32],
+    (colours, iteration, order): (&[Sweep], u32, &[u32]),
     x: &mut [Vec4],
     steps: &mut [f32],
     next: &mut Vec<Option<(Vec4, f32)>>,
 ) {
-    let Some(iteration) = colours.first().map(|c| c.iteration as usize) else {
-        return;
-    };
+    let iteration = iteration as usize;
+    let mut seen = vec![false; x.len()];
+    assert!(
+        order
+            .iter()
+            .all(|&i| !std::mem::replace(&mut seen[i as usize], true)),
+        "a sweep's order names a vertex twice"
+    );
     next.resize(order.len(), None);
     // Each colour twice: its steps, then their writes.
     let phases: Vec<Range<usize>> = (colours.iter())

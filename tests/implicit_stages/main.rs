@@ -386,8 +386,8 @@ fn check_sweep(g: &mut GpuSolver, c: &mut Case) {
     let coloring = c.prep.model.vertex_coloring();
     let mut x = c.x.clone();
     let (mut steps, mut next) = ([0.0f32], Vec::new());
-    let colours = coloring.sweeps(1);
-    c.with(|s| cpu::vbd_solve(s, &colours, &coloring.order, &mut x, &mut steps, &mut next));
+    let sweep = (&coloring.sweeps(1)[..], 0, &coloring.order[..]);
+    c.with(|s| cpu::vbd_solve(s, sweep, &mut x, &mut steps, &mut next));
     g.run_solve_ops(&[SolveOp::Sweep { iteration: 0 }], &c.step)
         .unwrap();
     let moved = max_abs_diff(&x, &c.x);
