@@ -12,9 +12,9 @@ use super::pcg::{pcg_direction, pcg_matvec, pcg_start, pcg_step, PcgScalars};
 use super::prolong::{correction_filter, prolong};
 use super::restrict::restrict;
 use super::smooth::{block_jacobi, level_residual, smooth, ColourRows};
-use super::vbd_solve::vbd_solve;
+use super::vbd_solve::{vbd_solve, SweepPlan};
 use crate::model::layout::{
-    Hinge, Membrane, Seam, SimParams, SpringRef, SubstepParams, Sweep, WORKGROUP_SIZE,
+    Hinge, Membrane, Seam, SimParams, SpringRef, SubstepParams, WORKGROUP_SIZE,
 };
 use crate::model::multigrid::{BlockPattern, Multigrid};
 use crate::model::{ClothModel, Csr};
@@ -129,10 +129,8 @@ pub struct Newton {
 /// Vertex Block Descent: the elements, the colour order and sweeps, and the solve's arrays.
 pub struct Vbd {
     elements: Arc<Elements>,
-    /// Vertices sorted by colour.
-    pub order: Vec<u32>,
-    /// Every colour of one sweep.
-    pub colours: Vec<Sweep>,
+    /// The vertices and colours of a sweep.
+    pub sweep: SweepPlan,
     /// The substep's operations.
     pub schedule: Vec<SolveOp>,
     /// The iterate: each particle's displacement over the step (w = inverse mass).
@@ -208,8 +206,7 @@ impl Vbd {
         );
         Vbd {
             elements,
-            colours: coloring.sweeps(1),
-            order: coloring.order,
+            sweep: SweepPlan::new(&coloring.sweeps(1), coloring.order, n),
             schedule,
             x: vec![Vec4::ZERO; n],
             y: vec![Vec4::ZERO; n],
@@ -313,8 +310,7 @@ impl Vbd {
             match op {
                 SolveOp::Sweep { iteration } => {
                     let (x, steps, next) = (&mut self.x, &mut self.steps, &mut self.next);
-                    let sweep = (&self.colours[..], iteration, &self.order[..]);
-                    vbd_solve(&s, sweep, x, steps, next);
+                    vbd_solve(&s, (&self.sweep, iteration), x, steps, next);
                     self.iterations_run.0 += 1;
                     *swept += 1;
                 }

@@ -75,7 +75,7 @@ pub use spring_forces::spring_forces;
 pub use strain_limit::strain_limit;
 pub use vbd_finish::vbd_finish;
 pub use vbd_init::vbd_init;
-pub use vbd_solve::{newton_step, solve3, vbd_solve};
+pub use vbd_solve::{newton_step, solve3, vbd_solve, SweepPlan};
 pub use wind_forces::wind_forces;
 
 use crate::error::Error;

@@ -59,47 +59,70 @@ pub fn solve3(hess: Mat3, f: Vec3) -> Vec3 {
     Vec3::new(r0.dot(f), r1.dot(f), r2.dot(f)) / det
 }
 
-/// One sweep over `colours` (colour after colour; the rows of `order` they name): every free
-/// vertex takes its Newton step, in place, and the sweep's `iteration` records the largest step
-/// length in `steps` (m).
+/// What a sweep visits, fixed for a solver and checked once: the vertices in colour order, and
+/// the sweep's phases (each colour twice: its steps, then their writes).
+pub struct SweepPlan {
+    order: Vec<u32>,
+    phases: Vec<Range<usize>>,
+}
+
+impl SweepPlan {
+    /// The plan of sweeping `colours` (each a range of rows of `order`) over `n` vertices.
+    ///
+    /// Panics if `order` names a vertex twice (two rows would write one vertex at once) or one
+    /// out of range, or if a colour names rows outside `order`.
+    pub fn new(colours: &[Sweep], order: Vec<u32>, n: usize) -> SweepPlan {
+        let mut seen = vec![false; n];
+        assert!(
+            order
+                .iter()
+                .all(|&i| !std::mem::replace(&mut seen[i as usize], true)),
+            "a sweep's order names a vertex twice"
+        );
+        let phases: Vec<Range<usize>> = (colours.iter())
+            .flat_map(|c| {
+                let rows = c.first as usize..(c.first + c.count) as usize;
+                assert!(
+                    rows.end <= order.len(),
+                    "a colour names rows past the order"
+                );
+                [rows.clone(), rows]
+            })
+            .collect();
+        SweepPlan { order, phases }
+    }
+
+    /// The vertices in colour order.
+    pub fn order(&self) -> &[u32] {
+        &self.order
+    }
+}
+
+/// One sweep of `plan` (colour after colour): every free vertex takes its Newton step, in
+/// place, and the sweep's `iteration` records the largest step length in `steps` (m).
 ///
 /// A vertex's system reads only itself and vertices of other colours, so a colour's steps are
-/// computed in parallel from the same `x` into `next` (scratch, one entry per entry of `order`:
-/// the vertex's next displacement and step length, `None` when pinned; kept between calls so
-/// that a sweep allocates little) and then written, each colour one parallel phase of the
-/// sweep (`colour_after_colour`) and its writes the next: the same numbers as one vertex after
-/// another, on any number of threads (the largest of them too).
+/// computed in parallel from the same `x` into `next` (scratch, one entry per row of the
+/// plan: the vertex's next displacement and step length, `None` when pinned; kept between
+/// calls so that a sweep allocates little) and then written, each colour one parallel phase of
+/// the sweep (`colour_after_colour`) and its writes the next: the same numbers as one vertex
+/// after another, on any number of threads (the largest of them too).
 ///
 /// That every vertex reads only vertices of other colours is the colouring's promise
 /// (`VbdElements::separated_by`, checked when the solver is built); the phases keep the sweep
-/// free of data races whatever the colouring, as long as `order` names no vertex twice
-/// (checked here: two rows writing one vertex at once).
+/// free of data races whatever the colouring, as the plan names no vertex twice.
 pub fn vbd_solve(
     s: &Implicit,
-    (colours, iteration, order): (&[Sweep], u32, &[u32]),
+    (plan, iteration): (&SweepPlan, u32),
     x: &mut [Vec4],
     steps: &mut [f32],
     next: &mut Vec<Option<(Vec4, f32)>>,
 ) {
-    let iteration = iteration as usize;
-    let mut seen = vec![false; x.len()];
-    assert!(
-        order
-            .iter()
-            .all(|&i| !std::mem::replace(&mut seen[i as usize], true)),
-        "a sweep's order names a vertex twice"
-    );
+    let order = &plan.order[..];
     next.resize(order.len(), None);
-    // Each colour twice: its steps, then their writes.
-    let phases: Vec<Range<usize>> = (colours.iter())
-        .flat_map(|c| {
-            let rows = c.first as usize..(c.first + c.count) as usize;
-            [rows.clone(), rows]
-        })
-        .collect();
     let (x, next) = (Cells::new(x), Cells::new(next));
     let longest = AtomicU32::new(0);
-    colour_after_colour(&phases, |phase, rows| {
+    colour_after_colour(&plan.phases, |phase, rows| {
         if phase % 2 == 0 {
             // SAFETY: nothing writes `x` during a colour's steps (its writes are the next
             // phase), and each entry of `next` belongs to one row.
@@ -110,8 +133,8 @@ pub fn vbd_solve(
         } else {
             let mut most = 0.0f32;
             for r in rows {
-                // SAFETY: row r's vertex is written by this row alone, and no colour's steps
-                // run while the writes do.
+                // SAFETY: row r's vertex is written by this row alone (the plan names no
+                // vertex twice), and no colour's steps run while the writes do.
                 if let Some((moved, len)) = unsafe { next.get(r) } {
                     unsafe { x.set(order[r] as usize, moved) };
                     most = most.max(len);
@@ -121,6 +144,7 @@ pub fn vbd_solve(
             longest.fetch_max(most.to_bits(), Ordering::Relaxed);
         }
     });
+    let iteration = iteration as usize;
     steps[iteration] = steps[iteration].max(f32::from_bits(longest.into_inner()));
 }
 
@@ -134,4 +158,42 @@ fn vertex_step(s: &Implicit, i: usize, x: &[Vec4]) -> Option<(Vec4, f32)> {
     let d = x[i].truncate();
     let delta = newton_step(s, i, d, sys.force, sys.hessian);
     Some(((d + delta).extend(w), delta.length()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn colours(counts: &[u32]) -> Vec<Sweep> {
+        let mut first = 0;
+        (counts.iter())
+            .map(|&count| {
+                let c = Sweep {
+                    first,
+                    count,
+                    ..Sweep::default()
+                };
+                first += count;
+                c
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_plan_has_each_colour_twice() {
+        let plan = SweepPlan::new(&colours(&[2, 1]), vec![0, 2, 1], 3);
+        assert_eq!(plan.phases, vec![0..2, 0..2, 2..3, 2..3]);
+    }
+
+    #[test]
+    #[should_panic(expected = "names a vertex twice")]
+    fn a_plan_refuses_a_vertex_twice() {
+        SweepPlan::new(&colours(&[2, 1]), vec![0, 2, 0], 3);
+    }
+
+    #[test]
+    #[should_panic(expected = "rows past the order")]
+    fn a_plan_refuses_rows_past_the_order() {
+        SweepPlan::new(&colours(&[2, 2]), vec![0, 2, 1], 3);
+    }
 }

@@ -386,8 +386,9 @@ fn check_sweep(g: &mut GpuSolver, c: &mut Case) {
     let coloring = c.prep.model.vertex_coloring();
     let mut x = c.x.clone();
     let (mut steps, mut next) = ([0.0f32], Vec::new());
-    let sweep = (&coloring.sweeps(1)[..], 0, &coloring.order[..]);
-    c.with(|s| cpu::vbd_solve(s, sweep, &mut x, &mut steps, &mut next));
+    let colours = coloring.sweeps(1);
+    let plan = cpu::SweepPlan::new(&colours, coloring.order.clone(), x.len());
+    c.with(|s| cpu::vbd_solve(s, (&plan, 0), &mut x, &mut steps, &mut next));
     g.run_solve_ops(&[SolveOp::Sweep { iteration: 0 }], &c.step)
         .unwrap();
     let moved = max_abs_diff(&x, &c.x);
