@@ -19,7 +19,7 @@ fn bench_fabric_quick_writes_both_tests_for_silk() {
         out.to_str().unwrap(),
     ]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let (header, rows) = common::read_csv(&out.join("fabric.csv"), "force_residual_rms");
+    let (header, rows) = common::read_csv(&out.join("fabric.csv"), "sweeps_per_substep");
     assert_eq!(header, CSV_COLUMNS);
     assert_eq!(rows.len(), 2);
     let (cusick, cantilever) = (&rows[0], &rows[1]);
@@ -76,7 +76,7 @@ fn bench_fabric_membrane_cuts_warp_weft_and_bias_and_reports_the_residual() {
         out.to_str().unwrap(),
     ]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let (_, rows) = common::read_csv(&out.join("fabric.csv"), "force_residual_rms");
+    let (_, rows) = common::read_csv(&out.join("fabric.csv"), "sweeps_per_substep");
     let tests: Vec<&str> = rows.iter().map(|r| r["test"].as_str()).collect();
     assert_eq!(
         tests,
@@ -97,6 +97,15 @@ fn bench_fabric_membrane_cuts_warp_weft_and_bias_and_reports_the_residual() {
     for row in &rows[1..] {
         assert!(residual(row) >= 0.0, "{}", row["test"]);
     }
+    // With no tolerance every step runs the default solve: one Newton step between two
+    // smoothing sweeps before and two after.
+    for row in &rows {
+        let work = (
+            common::finite(row, "newton_steps_per_substep"),
+            common::finite(row, "sweeps_per_substep"),
+        );
+        assert_eq!(work, (1.0, 4.0), "{}", row["test"]);
+    }
     // Bending is isotropic: every cut bends like the preset's B, within the quick test's 10%
     // (see the springs test above).
     for row in &rows[1..] {
@@ -107,6 +116,64 @@ fn bench_fabric_membrane_cuts_warp_weft_and_bias_and_reports_the_residual() {
     let scene =
         std::fs::read_to_string(out.join("specimens/cantilever_bias-cotton-1/scene.toml")).unwrap();
     assert!(scene.contains("model = \"membrane\"") && scene.contains("grain_deg = 45"));
+}
+
+#[test]
+fn a_tolerance_ends_solves_early_and_the_spacing_is_the_one_asked_for() {
+    let out = common::out_dir("bench-fabric", "tolerance");
+    let r = common::drapekit(&[
+        "bench",
+        "fabric",
+        "--quick",
+        "--presets",
+        "cotton",
+        "--tests",
+        "cusick",
+        "--cusick-spacing-mm",
+        "20",
+        "--integrator",
+        "implicit",
+        "--iterations",
+        "4",
+        "--tolerance",
+        "0.05",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let (_, rows) = common::read_csv(&out.join("fabric.csv"), "sweeps_per_substep");
+    assert_eq!(rows.len(), 1, "only the Cusick test was asked for");
+    assert_eq!(rows[0]["test"], "cusick");
+    assert_eq!(common::finite(&rows[0], "spacing_m"), 0.02);
+    // Up to 4 Newton steps a substep, each after 2 sweeps: the drape's early substeps, while
+    // it falls, need more than one, and once it rests the tolerance of 5% of the weight ends
+    // the solve before the first. Both ends must show: strictly between 0 and 4 on average.
+    let newton = common::finite(&rows[0], "newton_steps_per_substep");
+    assert!(
+        0.0 < newton && newton < 4.0,
+        "{newton} Newton steps a substep"
+    );
+    let scene = std::fs::read_to_string(out.join("specimens/cusick-cotton/scene.toml")).unwrap();
+    assert!(scene.contains("tolerance = 0.05") && scene.contains("iterations = 4"));
+}
+
+#[test]
+fn a_tolerance_without_implicit_euler_is_bad_input() {
+    let out = common::out_dir("bench-fabric", "symplectic-tolerance");
+    let r = common::drapekit(&[
+        "bench",
+        "fabric",
+        "--presets",
+        "silk",
+        "--tolerance",
+        "0.01",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(r.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(stderr.contains("--integrator implicit"), "{stderr}");
+    assert!(!out.exists());
 }
 
 #[test]

@@ -176,6 +176,10 @@ struct FabricArgs {
     /// sweeps where it has none (default: the scene's default, 1 Newton step or 10 sweeps).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     iterations: Option<u32>,
+    /// Implicit only: end a step's solve once its RMS force residual is at most this fraction
+    /// of the weight (0.01 = 1%), with --iterations the most Newton steps.
+    #[arg(long, value_parser = fraction_of_weight)]
+    tolerance: Option<f32>,
     /// The most frames a specimen may take to settle (default 480; 96 with --quick).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     max_frames: Option<u32>,
@@ -183,6 +187,34 @@ struct FabricArgs {
     /// warp, weft and shear; cantilevers cut along the warp, the weft and the bias).
     #[arg(long, default_value = "springs", value_parser = ["springs", "membrane"])]
     fabric_model: String,
+    /// The Cusick specimen's particle spacing in mm (default 7.5; 15 with --quick): run it at
+    /// several to see how the drape coefficient converges with the mesh.
+    #[arg(long, value_parser = positive_mm)]
+    cusick_spacing_mm: Option<f64>,
+    /// The tests to run (default both).
+    #[arg(long, value_delimiter = ',', value_parser = ["cusick", "cantilever"])]
+    tests: Vec<String>,
+}
+
+/// A force-residual tolerance: as `[solver] tolerance` takes it.
+fn fraction_of_weight(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(t) if (1e-6..=1e3).contains(&t) => Ok(t),
+        Ok(t) => Err(format!(
+            "{t} is outside 1e-6 to 1000 (a fraction of the weight)"
+        )),
+        Err(e) => Err(format!("{text:?} is not a number ({e})")),
+    }
+}
+
+/// A spacing in mm between 1 and 50: finer meshes a 30 cm disc into millions of particles,
+/// coarser leaves a handful across the 6 cm annulus that drapes.
+fn positive_mm(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(mm) if (1.0..=50.0).contains(&mm) => Ok(mm),
+        Ok(mm) => Err(format!("{mm} mm is outside 1 to 50 mm")),
+        Err(e) => Err(format!("{text:?} is not a number of mm ({e})")),
+    }
 }
 
 /// `drapekit bench accuracy SCENE --out DIR`.
@@ -319,8 +351,14 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
                     substeps: f.substeps.or((f.integrator == "implicit").then_some(4)),
                     integrator: f.integrator,
                     iterations: f.iterations,
+                    tolerance: f.tolerance,
                     max_frames: f.max_frames.unwrap_or(if f.quick { 96 } else { 480 }),
                     fabric_model: f.fabric_model,
+                },
+                cusick_spacing: f.cusick_spacing_mm.map(|mm| mm * 1e-3),
+                tests: drapekit::bench::fabric::Tests {
+                    cusick: f.tests.is_empty() || f.tests.iter().any(|t| t == "cusick"),
+                    cantilever: f.tests.is_empty() || f.tests.iter().any(|t| t == "cantilever"),
                 },
                 command: std::env::args().collect::<Vec<_>>().join(" "),
             })

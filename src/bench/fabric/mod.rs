@@ -39,8 +39,21 @@ pub struct FabricOptions {
     pub presets: Vec<String>,
     /// How every specimen is stepped.
     pub stepping: Stepping,
+    /// The Cusick specimen's particle spacing, m (None: 7.5 mm, 1.5 cm with `quick`).
+    pub cusick_spacing: Option<f64>,
+    /// Which tests to run: the Cusick drape test, the cantilevers, or both.
+    pub tests: Tests,
     /// The command line, for the report.
     pub command: String,
+}
+
+/// Which of the two tests a run makes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Tests {
+    /// The Cusick drape test.
+    pub cusick: bool,
+    /// The cantilever bending test.
+    pub cantilever: bool,
 }
 
 /// A published drape-coefficient band, in %.
@@ -106,6 +119,8 @@ pub struct FabricRow {
     /// Implicit Euler's RMS force residual at the end, relative to the weight (the largest
     /// over a cantilever's runs); `None` for explicit integrators.
     pub force_residual_rms: Option<f32>,
+    /// Implicit Euler's Newton steps and sweeps (summed over a cantilever's runs).
+    pub solve_work: specimen::SolveWork,
 }
 
 impl FabricRow {
@@ -119,10 +134,9 @@ impl FabricRow {
 fn cusick_row(
     p: &'static FabricPreset,
     dir: &Path,
-    quick: bool,
+    spacing: f64,
     step: &Stepping,
 ) -> Result<FabricRow, Error> {
-    let spacing = if quick { 0.015 } else { 0.0075 };
     let disc = cusick::DISC_RADIUS_M as f32;
     let s = specimen::settle(
         &dir.join(format!("cusick-{}", p.name)),
@@ -155,6 +169,7 @@ fn cusick_row(
         settled: s.settled_frame.is_some(),
         wall_seconds: s.wall_seconds,
         force_residual_rms: s.force_residual_rms,
+        solve_work: s.solve_work,
     })
 }
 
@@ -218,6 +233,7 @@ fn cantilever_row(
         settled: true,
         wall_seconds: 0.0,
         force_residual_rms: None,
+        solve_work: specimen::SolveWork::default(),
     };
     for (k, f) in factors.iter().enumerate() {
         let overhang = f * expected;
@@ -247,6 +263,7 @@ fn cantilever_row(
         row.frames += s.frames;
         row.settled &= s.settled_frame.is_some();
         row.wall_seconds += s.wall_seconds;
+        row.solve_work.add(s.solve_work);
         row.force_residual_rms = match (row.force_residual_rms, s.force_residual_rms) {
             (Some(a), Some(b)) => Some(a.max(b)),
             (a, b) => a.or(b),
@@ -295,6 +312,15 @@ fn tip_now(s: &specimen::Settled, end_x: f32) -> glam::Vec2 {
 
 /// Runs `drapekit bench fabric`.
 pub fn run_cli(opts: &FabricOptions) -> Result<Vec<FabricRow>, Error> {
+    if opts.stepping.tolerance.is_some() && opts.stepping.integrator != "implicit" {
+        return Err(InputError::new(
+            Path::new("drapekit bench fabric"),
+            "--tolerance",
+            "a tolerance ends implicit Euler's solves; the explicit integrators have none",
+            "remove --tolerance, or add --integrator implicit",
+        )
+        .into());
+    }
     let presets: Vec<&'static FabricPreset> = if opts.presets.is_empty() {
         PRESETS.iter().collect()
     } else {
@@ -314,11 +340,21 @@ pub fn run_cli(opts: &FabricOptions) -> Result<Vec<FabricRow>, Error> {
     };
     let dir = opts.out.join("specimens");
     let mut rows = Vec::new();
+    let cusick_spacing = opts
+        .cusick_spacing
+        .unwrap_or(if opts.quick { 0.015 } else { 0.0075 });
+    let cuts = if opts.tests.cantilever {
+        cantilever_cuts(&opts.stepping)
+    } else {
+        &[]
+    };
     for p in presets {
-        let row = cusick_row(p, &dir, opts.quick, &opts.stepping)?;
-        println!("{}", report::line(&row));
-        rows.push(row);
-        for &cut in cantilever_cuts(&opts.stepping) {
+        if opts.tests.cusick {
+            let row = cusick_row(p, &dir, cusick_spacing, &opts.stepping)?;
+            println!("{}", report::line(&row));
+            rows.push(row);
+        }
+        for &cut in cuts {
             let row = cantilever_row(p, &dir, opts.quick, &opts.stepping, cut)?;
             println!("{}", report::line(&row));
             rows.push(row);

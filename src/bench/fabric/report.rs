@@ -29,6 +29,8 @@ pub const CSV_COLUMNS: &[&str] = &[
     "settled",
     "wall_seconds",
     "force_residual_rms",
+    "newton_steps_per_substep",
+    "sweeps_per_substep",
 ];
 
 fn num(v: Option<f64>) -> String {
@@ -70,7 +72,7 @@ pub(super) fn csv_text(rows: &[FabricRow]) -> String {
         let (gb, ideal) = ratios(r);
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{}",
+            "{},{},{},{},{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{},{},{}",
             r.preset.name,
             r.test,
             num(Some(r.simulated)),
@@ -93,7 +95,9 @@ pub(super) fn csv_text(rows: &[FabricRow]) -> String {
             r.frames,
             if r.settled { "yes" } else { "no" },
             r.wall_seconds,
-            num(r.force_residual_rms.map(f64::from))
+            num(r.force_residual_rms.map(f64::from)),
+            num(r.solve_work.per_substep().map(|w| w.0)),
+            num(r.solve_work.per_substep().map(|w| w.1)),
         );
     }
     csv
@@ -147,6 +151,13 @@ fn stepping_text(s: &super::Stepping) -> String {
         ),
         other => format!("{other} Euler, {steps} substeps a frame"),
     };
+    let stepping = match (s.integrator.as_str(), s.tolerance) {
+        ("implicit", Some(t)) => format!(
+            "{stepping} at most, each step's solve ending once its RMS force residual is at \
+             most {t} of the weight"
+        ),
+        _ => stepping,
+    };
     stepping
         + match s.fabric_model.as_str() {
             "membrane" => ", the orthotropic membrane (warp, weft and shear)",
@@ -166,12 +177,12 @@ pub(super) fn md_text(rows: &[FabricRow], opts: &FabricOptions) -> String {
     );
     md += "**Cusick drape test** (30 cm specimen held within an 18 cm disc; DC from the \
            shadow rasterised at 0.5 mm):\n\n\
-           | preset | DC simulated | published | within | nodes | particles | spacing | frames | settled | force residual | wall |\n\
-           |---|---|---|---|---|---|---|---|---|---|---|\n";
+           | preset | DC simulated | published | within | nodes | particles | spacing | frames | settled | force residual | Newton steps, sweeps a step | wall |\n\
+           |---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows.iter().filter(|r| r.test == "cusick") {
         let _ = writeln!(
             md,
-            "| {} | {:.1}% | {} | {} | {} | {} | {:.1} mm | {} | {} | {} | {:.1} s |",
+            "| {} | {:.1}% | {} | {} | {} | {} | {:.2} mm | {} | {} | {} | {} | {:.1} s |",
             r.preset.name,
             r.simulated,
             r.band.map_or("not found".to_string(), |b| format!(
@@ -189,6 +200,9 @@ pub(super) fn md_text(rows: &[FabricRow], opts: &FabricOptions) -> String {
             if r.settled { "yes" } else { "no" },
             r.force_residual_rms
                 .map_or("–".to_string(), |f| format!("{f:.1e}")),
+            r.solve_work
+                .per_substep()
+                .map_or("–".to_string(), |(n, s)| format!("{n:.2}, {s:.1}")),
             r.wall_seconds
         );
     }

@@ -40,8 +40,12 @@ pub struct Stepping {
     pub integrator: String,
     /// Substeps per frame (`None`: the scene's "auto").
     pub substeps: Option<u32>,
-    /// Implicit iterations per substep (`None`: the scene's default).
+    /// Implicit iterations per substep (`None`: the scene's default); with a tolerance, the
+    /// most.
     pub iterations: Option<u32>,
+    /// Implicit Euler ends a substep's solve once its RMS force residual is at most this
+    /// fraction of the weight (`None`: always `iterations`).
+    pub tolerance: Option<f32>,
     /// The most frames to wait for the settle rule.
     pub max_frames: u32,
     /// `"springs"` or `"membrane"` (the preset's warp, weft and shear).
@@ -70,6 +74,34 @@ pub struct Settled {
     /// Implicit Euler's RMS force residual over the free particles at the last substep, as a
     /// fraction of their weight (`None` for explicit integrators).
     pub force_residual_rms: Option<f32>,
+    /// Implicit Euler's Newton steps and fine sweeps, summed over the substeps run.
+    pub solve_work: SolveWork,
+}
+
+/// The work of implicit Euler's solves over a run: what a substep costs.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SolveWork {
+    /// Substeps run.
+    pub substeps: u64,
+    /// Newton steps run.
+    pub newton_steps: u64,
+    /// Fine Vertex Block Descent sweeps run.
+    pub sweeps: u64,
+}
+
+impl SolveWork {
+    /// Newton steps and sweeps per substep (`None` before any substep).
+    pub fn per_substep(&self) -> Option<(f64, f64)> {
+        let n = self.substeps as f64;
+        (self.substeps > 0).then(|| (self.newton_steps as f64 / n, self.sweeps as f64 / n))
+    }
+
+    /// Adds another run's work.
+    pub fn add(&mut self, other: SolveWork) {
+        self.substeps += other.substeps;
+        self.newton_steps += other.newton_steps;
+        self.sweeps += other.sweeps;
+    }
 }
 
 /// The panel's GarmentCode JSON (centimetres; the panel is rotated flat onto the xz plane).
@@ -162,6 +194,9 @@ fn scene_toml(
     if let (true, Some(n)) = (step.integrator == "implicit", step.iterations) {
         s += &format!("iterations = {n}\n");
     }
+    if let (true, Some(t)) = (step.integrator == "implicit", step.tolerance) {
+        s += &format!("tolerance = {t}\n");
+    }
     s
 }
 
@@ -246,5 +281,14 @@ pub fn settle(
         particles: prep.model.positions.len(),
         wall_seconds: start.elapsed().as_secs_f64(),
         force_residual_rms: stats.force_residual.map(|(_, rms)| rms),
+        solve_work: SolveWork {
+            substeps: if stats.force_residual.is_some() {
+                u64::from(settled_frame.unwrap_or(stats.frames_run)) * u64::from(prep.substeps)
+            } else {
+                0
+            },
+            newton_steps: stats.newton_steps_run,
+            sweeps: stats.iterations_run,
+        },
     })
 }
