@@ -68,23 +68,22 @@ fn cloth_pinched_between_a_closing_arm_and_the_torso_ends_outside_both() {
     let dir = temp("pinch");
     let obj = grid_obj(Vec3::new(0.175, 1.215, 0.0), Vec3::Y, Vec3::Z, 0.05, 6);
     std::fs::write(dir.join("patch.obj"), obj).unwrap();
-    let text = r#"
+    let body = common::Mannequin {
+        animation: "arms-down",
+        transition_s: 0.0,
+        sdf_resolution_m: 0.005,
+        friction: Some(0.4),
+    }
+    .body_toml();
+    let text = format!(
+        r#"
 [cloth.mesh]
 path = "patch.obj"
 
 [fabric]
 preset = "cotton"
 
-[body]
-shape = "mannequin"
-center_m = [0.0, 0.0, 0.0]
-animation = "arms-down"
-motion_start_s = 0.0
-transition_s = 0.0
-thickness_m = 0.003
-sdf_resolution_m = 0.005
-friction = 0.4
-
+{body}
 [world]
 gravity_m_s2 = [0.0, 0.0, 0.0]
 
@@ -94,7 +93,8 @@ frames = 42
 substeps = 8
 iterations = 3
 integrator = "implicit"
-"#;
+"#
+    );
     let path = dir.join("scene.toml");
     std::fs::write(&path, text).unwrap();
     let prep = prepare(&Scene::load(&path).unwrap()).unwrap();
@@ -135,21 +135,19 @@ integrator = "implicit"
 
 /// The rigged mannequin walking from t = 0, with the cloth `cloth` (TOML text).
 fn walking_scene(dir: &std::path::Path, cloth: &str, frames: u32) -> Prepared {
+    let body = common::Mannequin {
+        animation: "walk",
+        transition_s: 0.0,
+        sdf_resolution_m: 0.005,
+        friction: Some(0.4),
+    }
+    .body_toml();
     let text = format!(
         r#"{cloth}
 [fabric]
 preset = "cotton"
 
-[body]
-shape = "mannequin"
-center_m = [0.0, 0.0, 0.0]
-animation = "walk"
-motion_start_s = 0.0
-transition_s = 0.0
-thickness_m = 0.003
-sdf_resolution_m = 0.005
-friction = 0.4
-
+{body}
 [world]
 gravity_m_s2 = [0.0, 0.0, 0.0]
 

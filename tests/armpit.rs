@@ -9,11 +9,21 @@ use drapekit::mesh::TriMesh;
 use drapekit::scene::Scene;
 use drapekit::sim::{part_poses, prepare};
 
+mod common;
+
 #[test]
 fn every_point_near_the_lowered_arms_armpit_is_claimed_and_near_its_exact_distance() {
     let dir = std::env::temp_dir().join(format!("drapekit-armpit-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let text = r#"
+    let body = common::Mannequin {
+        animation: "arms-down",
+        transition_s: 0.0,
+        sdf_resolution_m: 0.005,
+        friction: None,
+    }
+    .body_toml();
+    let text = format!(
+        r#"
 [cloth.grid]
 columns = 2
 rows = 2
@@ -24,19 +34,12 @@ center_m = [0.0, 3.0, 0.0]
 [fabric]
 preset = "cotton"
 
-[body]
-shape = "mannequin"
-center_m = [0.0, 0.0, 0.0]
-animation = "arms-down"
-motion_start_s = 0.0
-transition_s = 0.0
-thickness_m = 0.003
-sdf_resolution_m = 0.005
-
+{body}
 [solver]
 fps = 24
 frames = 40
-"#;
+"#
+    );
     let path = dir.join("scene.toml");
     std::fs::write(&path, text).unwrap();
     let prep = prepare(&Scene::load(&path).unwrap()).unwrap();

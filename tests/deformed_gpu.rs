@@ -26,6 +26,13 @@ const MID_WALK_S: f32 = 0.9;
 fn walking(integrator: &str) -> Prepared {
     let dir = std::env::temp_dir().join(format!("drapekit-deformed-gpu-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
+    let body = common::Mannequin {
+        animation: "walk",
+        transition_s: 0.0,
+        sdf_resolution_m: 0.01,
+        friction: None,
+    }
+    .body_toml();
     let text = format!(
         r#"
 [cloth.grid]
@@ -39,15 +46,7 @@ plane = "xz"
 [fabric]
 preset = "cotton"
 
-[body]
-shape = "mannequin"
-center_m = [0.0, 0.0, 0.0]
-animation = "walk"
-motion_start_s = 0.0
-transition_s = 0.0
-thickness_m = 0.003
-sdf_resolution_m = 0.01
-
+{body}
 [solver]
 fps = 24
 frames = 2
@@ -342,7 +341,15 @@ fn shoulder_patch() -> Prepared {
     let dir = std::env::temp_dir().join(format!("drapekit-deformed-gpu-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     // The shoulder's top is at y ≈ 1.38 m, 14 cm left of the axis.
-    let text = r#"
+    let body = common::Mannequin {
+        animation: "walk",
+        transition_s: 0.2,
+        sdf_resolution_m: 0.01,
+        friction: Some(0.4),
+    }
+    .body_toml();
+    let text = format!(
+        r#"
 [cloth.grid]
 width_m = 0.1
 height_m = 0.1
@@ -354,23 +361,15 @@ plane = "xz"
 [fabric]
 preset = "cotton"
 
-[body]
-shape = "mannequin"
-center_m = [0.0, 0.0, 0.0]
-animation = "walk"
-motion_start_s = 0.0
-transition_s = 0.2
-thickness_m = 0.003
-sdf_resolution_m = 0.01
-friction = 0.4
-
+{body}
 [solver]
 fps = 24
 frames = 12
 substeps = 8
 iterations = 3
 integrator = "implicit"
-"#;
+"#
+    );
     let path = dir.join("shoulder_patch.toml");
     std::fs::write(&path, text).unwrap();
     prepare(&Scene::load(&path).unwrap()).unwrap()

@@ -311,3 +311,31 @@ pub fn box_obj(h: f32) -> (String, Vec<glam::Vec3>) {
     }
     (s, corners)
 }
+
+/// The built-in mannequin, moving from t = 0: the `[body]` section of a test scene.
+pub struct Mannequin {
+    /// `"walk"` or `"arms-down"`.
+    pub animation: &'static str,
+    /// Seconds over which the motion starts from the rest pose.
+    pub transition_s: f64,
+    /// The distance field's cell, m.
+    pub sdf_resolution_m: f64,
+    /// Coulomb friction, where the test needs it.
+    pub friction: Option<f64>,
+}
+
+impl Mannequin {
+    /// The section's TOML text (3 mm thick, standing at the origin).
+    pub fn body_toml(&self) -> String {
+        let mut text = format!(
+            "[body]\nshape = \"mannequin\"\ncenter_m = [0.0, 0.0, 0.0]\nanimation = \"{}\"\n\
+             motion_start_s = 0.0\ntransition_s = {:?}\nthickness_m = 0.003\n\
+             sdf_resolution_m = {:?}\n",
+            self.animation, self.transition_s, self.sdf_resolution_m
+        );
+        if let Some(mu) = self.friction {
+            text += &format!("friction = {mu:?}\n");
+        }
+        text
+    }
+}
