@@ -155,6 +155,44 @@ fn a_tolerance_ends_solves_early_and_the_spacing_is_the_one_asked_for() {
     );
     let scene = std::fs::read_to_string(out.join("specimens/cusick-cotton/scene.toml")).unwrap();
     assert!(scene.contains("tolerance = 0.05") && scene.contains("iterations = 4"));
+    // The report has the test that ran and names the command as a reader would type it.
+    let md = std::fs::read_to_string(out.join("fabric.md")).unwrap();
+    assert!(md.contains("**Cusick drape test**"), "{md}");
+    assert!(!md.contains("Cantilever bending test"), "{md}");
+    assert!(
+        md.contains("Command: `drapekit bench fabric --quick"),
+        "{md}"
+    );
+}
+
+#[test]
+fn the_cantilevers_alone_run_and_a_cusick_spacing_without_the_cusick_test_is_refused() {
+    let out = common::out_dir("bench-fabric", "cantilever-only");
+    let args = [
+        "bench",
+        "fabric",
+        "--quick",
+        "--presets",
+        "jersey",
+        "--integrator",
+        "implicit",
+        "--tests",
+        "cantilever",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let refused = common::drapekit(&[&args[..], &["--cusick-spacing-mm", "10"]].concat());
+    assert_eq!(refused.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(stderr.contains("--cusick-spacing-mm"), "{stderr}");
+    assert!(!out.exists());
+    let r = common::drapekit(&args);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let (_, rows) = common::read_csv(&out.join("fabric.csv"), "sweeps_per_substep");
+    let tests: Vec<&str> = rows.iter().map(|r| r["test"].as_str()).collect();
+    assert_eq!(tests, ["cantilever"]);
+    let md = std::fs::read_to_string(out.join("fabric.md")).unwrap();
+    assert!(!md.contains("Cusick drape test"), "{md}");
 }
 
 #[test]

@@ -177,7 +177,8 @@ struct FabricArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     iterations: Option<u32>,
     /// Implicit only: end a step's solve once its RMS force residual is at most this fraction
-    /// of the weight (0.01 = 1%), with --iterations the most Newton steps.
+    /// of the weight (0.01 = 1%), with --iterations the most Newton steps (default 8 with a
+    /// tolerance).
     #[arg(long, value_parser = fraction_of_weight)]
     tolerance: Option<f32>,
     /// The most frames a specimen may take to settle (default 480; 96 with --quick).
@@ -194,6 +195,15 @@ struct FabricArgs {
     /// The tests to run (default both).
     #[arg(long, value_delimiter = ',', value_parser = ["cusick", "cantilever"])]
     tests: Vec<String>,
+}
+
+/// The command line as a reader would type it: `drapekit` and its arguments, whatever path
+/// the binary was run from.
+fn command_line() -> String {
+    std::iter::once("drapekit".to_string())
+        .chain(std::env::args().skip(1))
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// A force-residual tolerance: as `[solver] tolerance` takes it.
@@ -350,7 +360,7 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
                 stepping: drapekit::bench::fabric::Stepping {
                     substeps: f.substeps.or((f.integrator == "implicit").then_some(4)),
                     integrator: f.integrator,
-                    iterations: f.iterations,
+                    iterations: f.iterations.or(f.tolerance.map(|_| 8)),
                     tolerance: f.tolerance,
                     max_frames: f.max_frames.unwrap_or(if f.quick { 96 } else { 480 }),
                     fabric_model: f.fabric_model,
@@ -360,7 +370,7 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
                     cusick: f.tests.is_empty() || f.tests.iter().any(|t| t == "cusick"),
                     cantilever: f.tests.is_empty() || f.tests.iter().any(|t| t == "cantilever"),
                 },
-                command: std::env::args().collect::<Vec<_>>().join(" "),
+                command: command_line(),
             })
             .map(|_| ())
         }
@@ -400,7 +410,7 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
                 out: c.out,
                 contenders: c.strategies,
                 adapter: c.adapter,
-                command: std::env::args().collect::<Vec<_>>().join(" "),
+                command: command_line(),
             })
             .map(|_| ())
         }
@@ -428,7 +438,7 @@ fn run_peer(p: PeerArgs) -> Result<(), Error> {
     };
     positive(&p.sizes, "--sizes")?;
     positive(&p.newton_sizes, "--newton-sizes")?;
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let command = command_line();
     run_cli(&PeerOptions {
         sizes: p.sizes,
         newton_sizes: p.newton_sizes,

@@ -64,24 +64,26 @@ pub fn solve3(hess: Mat3, f: Vec3) -> Vec3 {
 pub struct SweepPlan {
     order: Vec<u32>,
     phases: Vec<Range<usize>>,
+    vertices: usize,
 }
 
 impl SweepPlan {
     /// The plan of sweeping `colours` (each a range of rows of `order`) over `n` vertices.
     ///
     /// Panics if `order` names a vertex twice (two rows would write one vertex at once) or one
-    /// out of range, or if a colour names rows outside `order`.
+    /// past `n`, or if a colour names rows outside `order`.
     pub fn new(colours: &[Sweep], order: Vec<u32>, n: usize) -> SweepPlan {
         let mut seen = vec![false; n];
-        assert!(
-            order
-                .iter()
-                .all(|&i| !std::mem::replace(&mut seen[i as usize], true)),
-            "a sweep's order names a vertex twice"
-        );
+        for &i in &order {
+            let slot = seen
+                .get_mut(i as usize)
+                .unwrap_or_else(|| panic!("a sweep's order names vertex {i} of {n}"));
+            assert!(!*slot, "a sweep's order names a vertex twice");
+            *slot = true;
+        }
         let phases: Vec<Range<usize>> = (colours.iter())
             .flat_map(|c| {
-                let rows = c.first as usize..(c.first + c.count) as usize;
+                let rows = c.first as usize..c.first as usize + c.count as usize;
                 assert!(
                     rows.end <= order.len(),
                     "a colour names rows past the order"
@@ -89,12 +91,11 @@ impl SweepPlan {
                 [rows.clone(), rows]
             })
             .collect();
-        SweepPlan { order, phases }
-    }
-
-    /// The vertices in colour order.
-    pub fn order(&self) -> &[u32] {
-        &self.order
+        SweepPlan {
+            order,
+            phases,
+            vertices: n,
+        }
     }
 }
 
@@ -118,6 +119,7 @@ pub fn vbd_solve(
     steps: &mut [f32],
     next: &mut Vec<Option<(Vec4, f32)>>,
 ) {
+    assert_eq!(x.len(), plan.vertices, "the plan is for another mesh");
     let order = &plan.order[..];
     next.resize(order.len(), None);
     let (x, next) = (Cells::new(x), Cells::new(next));
@@ -189,6 +191,12 @@ mod tests {
     #[should_panic(expected = "names a vertex twice")]
     fn a_plan_refuses_a_vertex_twice() {
         SweepPlan::new(&colours(&[2, 1]), vec![0, 2, 0], 3);
+    }
+
+    #[test]
+    #[should_panic(expected = "names vertex 3 of 3")]
+    fn a_plan_refuses_a_vertex_past_the_mesh() {
+        SweepPlan::new(&colours(&[2, 1]), vec![0, 3, 1], 3);
     }
 
     #[test]

@@ -321,6 +321,15 @@ pub fn run_cli(opts: &FabricOptions) -> Result<Vec<FabricRow>, Error> {
         )
         .into());
     }
+    if opts.cusick_spacing.is_some() && !opts.tests.cusick {
+        return Err(InputError::new(
+            Path::new("drapekit bench fabric"),
+            "--cusick-spacing-mm",
+            "the Cusick specimen's spacing, but --tests leaves the Cusick test out",
+            "remove --cusick-spacing-mm, or add cusick to --tests",
+        )
+        .into());
+    }
     let presets: Vec<&'static FabricPreset> = if opts.presets.is_empty() {
         PRESETS.iter().collect()
     } else {

@@ -166,8 +166,13 @@ fn stepping_text(s: &super::Stepping) -> String {
 }
 
 pub(super) fn md_text(rows: &[FabricRow], opts: &FabricOptions) -> String {
+    let tests = match (opts.tests.cusick, opts.tests.cantilever) {
+        (true, true) => "two virtual standard tests",
+        (true, false) => "the virtual Cusick drape test",
+        _ => "the virtual cantilever bending test",
+    };
     let mut md = format!(
-        "Fabric presets in two virtual standard tests, on the CPU path ({}); {}, air damping \
+        "Fabric presets in {tests}, on the CPU path ({}); {}, air damping \
          10/s, each specimen run until no particle moved more than 0.5 mm (Cusick) or 0.1 mm \
          (cantilever) over 0.25 s (at most {} frames at 24 fps). Command: `{}`.\n\n",
         cpu_threads_description(),
@@ -175,6 +180,17 @@ pub(super) fn md_text(rows: &[FabricRow], opts: &FabricOptions) -> String {
         opts.stepping.max_frames,
         opts.command
     );
+    if opts.tests.cusick {
+        md += &cusick_md(rows);
+    }
+    if opts.tests.cantilever {
+        md += &cantilever_md(rows);
+    }
+    md
+}
+
+fn cusick_md(rows: &[FabricRow]) -> String {
+    let mut md = String::new();
     md += "**Cusick drape test** (30 cm specimen held within an 18 cm disc; DC from the \
            shadow rasterised at 0.5 mm):\n\n\
            | preset | DC simulated | published | within | nodes | particles | spacing | frames | settled | force residual | Newton steps, sweeps a step | wall |\n\
@@ -206,6 +222,11 @@ pub(super) fn md_text(rows: &[FabricRow], opts: &FabricOptions) -> String {
             r.wall_seconds
         );
     }
+    md
+}
+
+fn cantilever_md(rows: &[FabricRow]) -> String {
+    let mut md = String::new();
     let _ = write!(
         md,
         "\n**Cantilever bending test** (25 mm strip held on the platform; the overhang at which \

@@ -283,7 +283,8 @@ pub fn settle(
         force_residual_rms: stats.force_residual.map(|(_, rms)| rms),
         solve_work: SolveWork {
             substeps: if stats.force_residual.is_some() {
-                u64::from(settled_frame.unwrap_or(stats.frames_run)) * u64::from(prep.substeps)
+                // The frame the rule fired at, when it did: the run stops there.
+                u64::from(stats.frames_run) * u64::from(prep.substeps)
             } else {
                 0
             },
