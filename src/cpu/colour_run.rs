@@ -21,6 +21,22 @@ use std::cell::UnsafeCell;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
+/// The colour of each of `n` vertices that `order` lists colour after colour, colour k from
+/// `colour_offsets[k]` (`u32::MAX` for a vertex it does not list). Panics if `order` lists a
+/// vertex twice (two rows of a sweep would write it at once) or one past `n`.
+pub fn colour_of_each(order: &[u32], colour_offsets: &[u32], n: usize) -> Vec<u32> {
+    let mut colour = vec![u32::MAX; n];
+    for (k, w) in colour_offsets.windows(2).enumerate() {
+        for &i in &order[w[0] as usize..w[1] as usize] {
+            let slot = (colour.get_mut(i as usize))
+                .unwrap_or_else(|| panic!("the colour order lists vertex {i} of {n}"));
+            assert_eq!(*slot, u32::MAX, "the colour order lists vertex {i} twice");
+            *slot = k as u32;
+        }
+    }
+    colour
+}
+
 /// Runs `run(k, rows)` on every row of `colours` (row ranges, colour k the k-th given): the
 /// rows of a colour after every row of the colours before it, the rows of one colour in any order, on any
 /// thread. A colour splits into up to one chunk per thread of about `grain::COLOUR_ROWS` rows

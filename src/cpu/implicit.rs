@@ -206,7 +206,7 @@ impl Vbd {
         );
         Vbd {
             elements,
-            sweep: SweepPlan::new(&coloring.sweeps(1), coloring.order, n),
+            sweep: SweepPlan::new(coloring.order, &coloring.offsets, n),
             schedule,
             x: vec![Vec4::ZERO; n],
             y: vec![Vec4::ZERO; n],

@@ -1,6 +1,6 @@
 //! CPU twins of `kernels/smooth.wgsl` and `kernels/level_residual.wgsl`.
 
-use super::colour_run::{colour_after_colour, Cells};
+use super::colour_run::{colour_after_colour, colour_of_each, Cells};
 use super::grain;
 use super::vbd_solve::solve3;
 use crate::model::multigrid::BlockPattern;
@@ -42,13 +42,7 @@ impl ColourRows {
     /// rows at once, in place, on any number of threads.
     pub fn new(pattern: &BlockPattern, order: &[u32], colour_offsets: &[u32]) -> ColourRows {
         let rows = pattern.offsets.len() - 1;
-        let mut colour = vec![u32::MAX; rows];
-        for (k, w) in colour_offsets.windows(2).enumerate() {
-            for &r in &order[w[0] as usize..w[1] as usize] {
-                assert_eq!(colour[r as usize], u32::MAX, "row {r} is listed twice");
-                colour[r as usize] = k as u32;
-            }
-        }
+        let colour = colour_of_each(order, colour_offsets, rows);
         assert_eq!(order.len(), rows, "every row is listed once");
         for r in 0..rows {
             let blocks =

@@ -6,9 +6,8 @@
 //! force (−gradient) and H its 3×3 Hessian block, D += H⁻¹f. Vertices of one colour share no
 //! element, so they update at once (one dispatch) without reading each other.
 
-use super::colour_run::{colour_after_colour, Cells};
+use super::colour_run::{colour_after_colour, colour_of_each, Cells};
 use super::implicit_terms::Implicit;
-use crate::model::layout::Sweep;
 use glam::{Mat3, Vec3, Vec4};
 use std::ops::Range;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -68,26 +67,22 @@ pub struct SweepPlan {
 }
 
 impl SweepPlan {
-    /// The plan of sweeping `colours` (each a range of rows of `order`) over `n` vertices.
+    /// The plan of sweeping the `n` vertices that `order` lists colour after colour, colour k
+    /// from `colour_offsets[k]`.
     ///
-    /// Panics if `order` names a vertex twice (two rows would write one vertex at once) or one
-    /// past `n`, or if a colour names rows outside `order`.
-    pub fn new(colours: &[Sweep], order: Vec<u32>, n: usize) -> SweepPlan {
-        let mut seen = vec![false; n];
-        for &i in &order {
-            let slot = seen
-                .get_mut(i as usize)
-                .unwrap_or_else(|| panic!("a sweep's order names vertex {i} of {n}"));
-            assert!(!*slot, "a sweep's order names a vertex twice");
-            *slot = true;
-        }
-        let phases: Vec<Range<usize>> = (colours.iter())
-            .flat_map(|c| {
-                let rows = c.first as usize..c.first as usize + c.count as usize;
-                assert!(
-                    rows.end <= order.len(),
-                    "a colour names rows past the order"
-                );
+    /// Panics if `order` lists a vertex twice (two rows would write one vertex at once) or one
+    /// past `n` (`colour_of_each`), or if the offsets run past `order`.
+    pub fn new(order: Vec<u32>, colour_offsets: &[u32], n: usize) -> SweepPlan {
+        assert!(
+            colour_offsets
+                .last()
+                .is_none_or(|&end| end as usize <= order.len()),
+            "the colour offsets run past the order"
+        );
+        colour_of_each(&order, colour_offsets, n);
+        let phases: Vec<Range<usize>> = (colour_offsets.windows(2))
+            .flat_map(|w| {
+                let rows = w[0] as usize..w[1] as usize;
                 [rows.clone(), rows]
             })
             .collect();
@@ -166,42 +161,27 @@ fn vertex_step(s: &Implicit, i: usize, x: &[Vec4]) -> Option<(Vec4, f32)> {
 mod tests {
     use super::*;
 
-    fn colours(counts: &[u32]) -> Vec<Sweep> {
-        let mut first = 0;
-        (counts.iter())
-            .map(|&count| {
-                let c = Sweep {
-                    first,
-                    count,
-                    ..Sweep::default()
-                };
-                first += count;
-                c
-            })
-            .collect()
-    }
-
     #[test]
     fn a_plan_has_each_colour_twice() {
-        let plan = SweepPlan::new(&colours(&[2, 1]), vec![0, 2, 1], 3);
+        let plan = SweepPlan::new(vec![0, 2, 1], &[0, 2, 3], 3);
         assert_eq!(plan.phases, vec![0..2, 0..2, 2..3, 2..3]);
     }
 
     #[test]
-    #[should_panic(expected = "names a vertex twice")]
+    #[should_panic(expected = "lists vertex 0 twice")]
     fn a_plan_refuses_a_vertex_twice() {
-        SweepPlan::new(&colours(&[2, 1]), vec![0, 2, 0], 3);
+        SweepPlan::new(vec![0, 2, 0], &[0, 2, 3], 3);
     }
 
     #[test]
-    #[should_panic(expected = "names vertex 3 of 3")]
+    #[should_panic(expected = "lists vertex 3 of 3")]
     fn a_plan_refuses_a_vertex_past_the_mesh() {
-        SweepPlan::new(&colours(&[2, 1]), vec![0, 3, 1], 3);
+        SweepPlan::new(vec![0, 3, 1], &[0, 2, 3], 3);
     }
 
     #[test]
-    #[should_panic(expected = "rows past the order")]
+    #[should_panic(expected = "run past the order")]
     fn a_plan_refuses_rows_past_the_order() {
-        SweepPlan::new(&colours(&[2, 2]), vec![0, 2, 1], 3);
+        SweepPlan::new(vec![0, 2, 1], &[0, 2, 4], 3);
     }
 }

@@ -386,8 +386,7 @@ fn check_sweep(g: &mut GpuSolver, c: &mut Case) {
     let coloring = c.prep.model.vertex_coloring();
     let mut x = c.x.clone();
     let (mut steps, mut next) = ([0.0f32], Vec::new());
-    let colours = coloring.sweeps(1);
-    let plan = cpu::SweepPlan::new(&colours, coloring.order.clone(), x.len());
+    let plan = cpu::SweepPlan::new(coloring.order.clone(), &coloring.offsets, x.len());
     c.with(|s| cpu::vbd_solve(s, (&plan, 0), &mut x, &mut steps, &mut next));
     g.run_solve_ops(&[SolveOp::Sweep { iteration: 0 }], &c.step)
         .unwrap();
