@@ -208,10 +208,12 @@ fn command_line() -> String {
 
 /// A force-residual tolerance: as `[solver] tolerance` takes it.
 fn fraction_of_weight(text: &str) -> Result<f32, String> {
-    match text.parse::<f32>() {
-        Ok(t) if (1e-6..=1e3).contains(&t) => Ok(t),
+    // Checked in f64, as the scene's key is.
+    let (low, high) = drapekit::scene::TOLERANCE_RANGE;
+    match text.parse::<f64>() {
+        Ok(t) if (low..=high).contains(&t) => Ok(t as f32),
         Ok(t) => Err(format!(
-            "{t} is outside 1e-6 to 1000 (a fraction of the weight)"
+            "{t} is outside {low:e} to {high:e} (a fraction of the weight)"
         )),
         Err(e) => Err(format!("{text:?} is not a number ({e})")),
     }

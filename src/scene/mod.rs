@@ -25,7 +25,8 @@ pub use preview::{
 };
 pub use self_collision::SelfCollision;
 pub use solver::{
-    OutputSettings, SolverSettings, INTEGRATOR_EXPLICIT, INTEGRATOR_IMPLICIT, INTEGRATOR_SYMPLECTIC,
+    OutputSettings, SolverSettings, INTEGRATOR_EXPLICIT, INTEGRATOR_IMPLICIT,
+    INTEGRATOR_SYMPLECTIC, TOLERANCE_RANGE,
 };
 pub use world::Wind;
 

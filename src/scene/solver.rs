@@ -5,6 +5,10 @@ use crate::check::Checker;
 use crate::error::InputError;
 use std::path::{Path, PathBuf};
 
+/// The `[solver] tolerance` values accepted: an RMS force residual of a millionth to a
+/// thousand times the weight.
+pub const TOLERANCE_RANGE: (f64, f64) = (1e-6, 1e3);
+
 /// Forward (explicit) Euler. The integrator codes are mirrored in `kernels/common.wgsl`.
 pub const INTEGRATOR_EXPLICIT: u32 = 0;
 /// Semi-implicit (symplectic) Euler.
@@ -160,7 +164,7 @@ pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings,
                 "solver",
                 "tolerance",
                 v,
-                (1e-6, 1e3),
+                TOLERANCE_RANGE,
                 "(the RMS force residual |f|/(m·g) of the free particles: 0.01 = 1% of each \
                  particle's weight)",
             )?),

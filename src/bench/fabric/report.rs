@@ -70,6 +70,7 @@ pub(super) fn csv_text(rows: &[FabricRow]) -> String {
     let mut csv = CSV_COLUMNS.join(",") + "\n";
     for r in rows {
         let (gb, ideal) = ratios(r);
+        let work = r.solve_work.per_substep();
         let _ = writeln!(
             csv,
             "{},{},{},{},{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{},{},{}",
@@ -96,8 +97,8 @@ pub(super) fn csv_text(rows: &[FabricRow]) -> String {
             if r.settled { "yes" } else { "no" },
             r.wall_seconds,
             num(r.force_residual_rms.map(f64::from)),
-            num(r.solve_work.per_substep().map(|w| w.0)),
-            num(r.solve_work.per_substep().map(|w| w.1)),
+            num(work.map(|w| w.0)),
+            num(work.map(|w| w.1)),
         );
     }
     csv
