@@ -231,3 +231,51 @@ fn an_unknown_preset_is_bad_input_and_writes_nothing() {
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn a_bending_scale_gives_the_cantilever_the_scaled_rigidity_and_a_bad_one_is_refused() {
+    let out = common::out_dir("bench-fabric", "bending-scale");
+    let args = [
+        "bench",
+        "fabric",
+        "--presets",
+        "jersey",
+        "--integrator",
+        "implicit",
+        "--tests",
+        "cantilever",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    for bad in ["0", "-1", "1000", "NaN", "four"] {
+        let flag = format!("--bending-scale={bad}");
+        let r = common::drapekit(&[&args[..], &[flag.as_str()]].concat());
+        assert_eq!(r.status.code(), Some(2), "--bending-scale {bad}");
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert!(stderr.contains("--bending-scale"), "{stderr}");
+        assert!(!out.exists());
+    }
+    let r = common::drapekit(&[&args[..], &["--bending-scale", "4"]].concat());
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let (_, rows) = common::read_csv(&out.join("fabric.csv"), "sweeps_per_substep");
+    let row = &rows[0];
+    let jersey = drapekit::scene::preset("jersey")
+        .unwrap()
+        .bending_stiffness_n_m;
+    let b = common::finite(row, "preset_b_n_m");
+    // The CSV writes the f64 it computed, so it reads back to the bit.
+    assert_eq!(b, 4.0 * jersey);
+    // The strip measures the rigidity it was given: G within 10% of the scaled B, as the full
+    // table's cantilevers are (a quarter spacing of ragged clamp line is 1/64 of the overhang,
+    // about 5% of G). Had the scale not reached the specimen, G/B would be about 0.25.
+    let (gb, ideal) = (
+        common::finite(row, "g_over_b"),
+        common::finite(row, "elastica_g_over_b"),
+    );
+    assert!((gb / ideal - 1.0).abs() < 0.1, "G/B {gb} against {ideal}");
+    let md = std::fs::read_to_string(out.join("fabric.md")).unwrap();
+    assert!(md.contains("bending rigidity times 4"), "{md}");
+    let scene =
+        std::fs::read_to_string(out.join("specimens/cantilever-jersey-1/scene.toml")).unwrap();
+    assert!(scene.contains("--bending-scale"), "{scene}");
+}

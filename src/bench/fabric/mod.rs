@@ -87,8 +87,8 @@ pub fn drape_band(preset: &str) -> Option<Band> {
 /// One preset in one test.
 #[derive(Clone, Debug)]
 pub struct FabricRow {
-    /// The preset.
-    pub preset: &'static FabricPreset,
+    /// The preset (its bending rigidity scaled by `--bending-scale`).
+    pub preset: FabricPreset,
     /// `"cusick"`, `"cantilever"` (along the warp), `"cantilever_weft"` or
     /// `"cantilever_bias"`.
     pub test: &'static str,
@@ -132,7 +132,7 @@ impl FabricRow {
 
 /// Drapes `p` in the Cusick rig: held within the disc radius, settled under gravity.
 fn cusick_row(
-    p: &'static FabricPreset,
+    p: &FabricPreset,
     dir: &Path,
     spacing: f64,
     step: &Stepping,
@@ -153,7 +153,7 @@ fn cusick_row(
     )?;
     let dc = 100.0 * cusick::drape_coefficient(&s.rest, &s.positions, &s.triangles);
     Ok(FabricRow {
-        preset: p,
+        preset: *p,
         test: "cusick",
         simulated: dc,
         band: drape_band(p.name),
@@ -201,7 +201,7 @@ fn cantilever_cuts(step: &Stepping) -> &'static [(&'static str, f64)] {
 /// Bends `p` cut `grain_deg` from the warp over the platform edge at overhangs around the
 /// elastica's, and finds where its tip crosses the test line.
 fn cantilever_row(
-    p: &'static FabricPreset,
+    p: &FabricPreset,
     dir: &Path,
     quick: bool,
     step: &Stepping,
@@ -218,7 +218,7 @@ fn cantilever_row(
     };
     let (mut points, mut errors) = (Vec::new(), Vec::new());
     let mut row = FabricRow {
-        preset: p,
+        preset: *p,
         test,
         simulated: f64::NAN,
         band: None,
@@ -358,6 +358,11 @@ pub fn run_cli(opts: &FabricOptions) -> Result<Vec<FabricRow>, Error> {
         &[]
     };
     for p in presets {
+        let p = &FabricPreset {
+            bending_stiffness_n_m: p.bending_stiffness_n_m
+                * opts.stepping.bending_scale.unwrap_or(1.0),
+            ..*p
+        };
         if opts.tests.cusick {
             let row = cusick_row(p, &dir, cusick_spacing, &opts.stepping)?;
             println!("{}", report::line(&row));

@@ -159,11 +159,14 @@ fn stepping_text(s: &super::Stepping) -> String {
         ),
         _ => stepping,
     };
-    stepping
-        + match s.fabric_model.as_str() {
-            "membrane" => ", the orthotropic membrane (warp, weft and shear)",
-            _ => ", isotropic edge springs",
-        }
+    let model = match s.fabric_model.as_str() {
+        "membrane" => ", the orthotropic membrane (warp, weft and shear)",
+        _ => ", isotropic edge springs",
+    };
+    let bending = s.bending_scale.map_or(String::new(), |f| {
+        format!(", every preset's bending rigidity times {f} (the B columns are the scaled ones)")
+    });
+    stepping + model + &bending
 }
 
 pub(super) fn md_text(rows: &[FabricRow], opts: &FabricOptions) -> String {

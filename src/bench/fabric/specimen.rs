@@ -50,6 +50,8 @@ pub struct Stepping {
     pub max_frames: u32,
     /// `"springs"` or `"membrane"` (the preset's warp, weft and shear).
     pub fabric_model: String,
+    /// The preset's bending rigidity times this (`None`: as the preset has it).
+    pub bending_scale: Option<f64>,
 }
 
 /// A settled specimen.
@@ -145,6 +147,14 @@ fn pattern_json(outline: Outline) -> String {
 /// is capped at `stretch`, the capped values.
 fn fabric_lines(preset: &str, stretch: Option<f64>, grain_deg: f64, step: &Stepping) -> String {
     let mut s = String::new();
+    if let (Some(f), Some(p)) = (step.bending_scale, crate::scene::preset(preset)) {
+        // The key is the hinge stiffness, 4·B ([Fabric presets]).
+        s += &format!(
+            "# The preset's bending rigidity times {f} (--bending-scale).\n\
+             bending_stiffness_n_m = {}\n",
+            crate::scene::HINGE_PER_RIGIDITY * p.bending_stiffness_n_m * f
+        );
+    }
     if let Some(k) = stretch {
         s += &format!(
             "# Softer than the preset: see docs/src/benchmarks/fabric.md.\n\
