@@ -195,8 +195,8 @@ struct FabricArgs {
     /// The tests to run (default both).
     #[arg(long, value_delimiter = ',', value_parser = ["cusick", "cantilever"])]
     tests: Vec<String>,
-    /// Multiply every preset's bending rigidity by this (0.01 to 100; default 1): how the
-    /// drape coefficient follows bending, the cantilevers checking the rigidity given.
+    /// Multiply every preset's bending rigidity by this (0.01 to 100; default 1), to see how
+    /// the drape coefficient follows bending (the cantilevers measure the scaled rigidity).
     #[arg(long, value_parser = bending_scale)]
     bending_scale: Option<f64>,
 }
@@ -223,8 +223,6 @@ fn fraction_of_weight(text: &str) -> Result<f32, String> {
     }
 }
 
-/// A spacing in mm between 1 and 50: finer meshes a 30 cm disc into millions of particles,
-/// coarser leaves a handful across the 6 cm annulus that drapes.
 /// The bending scale's range: a hundredth to a hundred times the preset's rigidity spans the
 /// bending lengths of real fabrics (0.7 to 3.9 cm in Feng et al. 2022's 618) from any preset.
 fn bending_scale(text: &str) -> Result<f64, String> {
@@ -235,6 +233,8 @@ fn bending_scale(text: &str) -> Result<f64, String> {
     }
 }
 
+/// A spacing in mm between 1 and 50: finer meshes a 30 cm disc into millions of particles,
+/// coarser leaves a handful across the 6 cm annulus that drapes.
 fn positive_mm(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
         Ok(mm) if (1.0..=50.0).contains(&mm) => Ok(mm),

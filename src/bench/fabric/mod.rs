@@ -359,8 +359,7 @@ pub fn run_cli(opts: &FabricOptions) -> Result<Vec<FabricRow>, Error> {
     };
     for p in presets {
         let p = &FabricPreset {
-            bending_stiffness_n_m: p.bending_stiffness_n_m
-                * opts.stepping.bending_scale.unwrap_or(1.0),
+            bending_stiffness_n_m: specimen::bending_rigidity(p, &opts.stepping),
             ..*p
         };
         if opts.tests.cusick {

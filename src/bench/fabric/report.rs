@@ -164,7 +164,7 @@ fn stepping_text(s: &super::Stepping) -> String {
         _ => ", isotropic edge springs",
     };
     let bending = s.bending_scale.map_or(String::new(), |f| {
-        format!(", every preset's bending rigidity times {f} (the B columns are the scaled ones)")
+        format!(", every preset's bending rigidity times {f} (B here and `preset_b_n_m` in fabric.csv are the scaled values)")
     });
     stepping + model + &bending
 }

@@ -54,6 +54,12 @@ pub struct Stepping {
     pub bending_scale: Option<f64>,
 }
 
+/// The bending rigidity a specimen of `preset` is given, N·m: the preset's, times
+/// `--bending-scale`. The one place the scale is applied, for the scene and the report alike.
+pub fn bending_rigidity(preset: &crate::scene::FabricPreset, step: &Stepping) -> f64 {
+    preset.bending_stiffness_n_m * step.bending_scale.unwrap_or(1.0)
+}
+
 /// A settled specimen.
 #[derive(Clone, Debug)]
 pub struct Settled {
@@ -148,11 +154,11 @@ fn pattern_json(outline: Outline) -> String {
 fn fabric_lines(preset: &str, stretch: Option<f64>, grain_deg: f64, step: &Stepping) -> String {
     let mut s = String::new();
     if let (Some(f), Some(p)) = (step.bending_scale, crate::scene::preset(preset)) {
-        // The key is the hinge stiffness, 4·B ([Fabric presets]).
+        // The key is the hinge stiffness, HINGE_PER_RIGIDITY·B.
         s += &format!(
             "# The preset's bending rigidity times {f} (--bending-scale).\n\
              bending_stiffness_n_m = {}\n",
-            crate::scene::HINGE_PER_RIGIDITY * p.bending_stiffness_n_m * f
+            crate::scene::HINGE_PER_RIGIDITY * bending_rigidity(p, step)
         );
     }
     if let Some(k) = stretch {
