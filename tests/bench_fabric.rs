@@ -165,13 +165,13 @@ fn a_tolerance_ends_solves_early_and_the_spacing_is_the_one_asked_for() {
     );
 }
 
-#[test]
-fn the_cantilevers_alone_run_and_a_cusick_spacing_without_the_cusick_test_is_refused() {
-    let out = common::out_dir("bench-fabric", "cantilever-only");
-    let args = [
+/// `drapekit bench fabric`'s arguments for the jersey's cantilever alone, stepped by implicit
+/// Euler, into `out`.
+fn jersey_cantilever(out: &std::path::Path) -> Vec<&str> {
+    let out = out.to_str().unwrap();
+    vec![
         "bench",
         "fabric",
-        "--quick",
         "--presets",
         "jersey",
         "--integrator",
@@ -179,8 +179,14 @@ fn the_cantilevers_alone_run_and_a_cusick_spacing_without_the_cusick_test_is_ref
         "--tests",
         "cantilever",
         "--out",
-        out.to_str().unwrap(),
-    ];
+        out,
+    ]
+}
+
+#[test]
+fn the_cantilevers_alone_run_and_a_cusick_spacing_without_the_cusick_test_is_refused() {
+    let out = common::out_dir("bench-fabric", "cantilever-only");
+    let args = [jersey_cantilever(&out), vec!["--quick"]].concat();
     let refused = common::drapekit(&[&args[..], &["--cusick-spacing-mm", "10"]].concat());
     assert_eq!(refused.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&refused.stderr);
@@ -235,18 +241,7 @@ fn an_unknown_preset_is_bad_input_and_writes_nothing() {
 #[test]
 fn a_bending_scale_gives_the_cantilever_the_scaled_rigidity_and_a_bad_one_is_refused() {
     let out = common::out_dir("bench-fabric", "bending-scale");
-    let args = [
-        "bench",
-        "fabric",
-        "--presets",
-        "jersey",
-        "--integrator",
-        "implicit",
-        "--tests",
-        "cantilever",
-        "--out",
-        out.to_str().unwrap(),
-    ];
+    let args = jersey_cantilever(&out);
     for bad in ["0", "-1", "1000", "NaN", "four"] {
         let flag = format!("--bending-scale={bad}");
         let r = common::drapekit(&[&args[..], &[flag.as_str()]].concat());
