@@ -35,6 +35,10 @@ struct SimParams {
     tolerance: f32,              // 1, implicit Euler stops sweeping once the largest step falls below tolerance × the first (0: never)
     num_bodies: u32,             // collision bodies in `bodies`
     smoothing: u32,              // implicit Euler with coarse levels: fine sweeps around each coarse correction
+    euler_onset: f32,            // m², π²B/Y: a spring of rest length L buckles at compression euler_onset / L
+    buckled_fraction: f32,       // 1, stiffness a buckled spring keeps beyond (0: springs linear in compression)
+    _pad0: u32,
+    _pad1: u32,
     bodies: array<BodyParams, MAX_BODIES>,
 }
 
@@ -135,6 +139,70 @@ const VBD_STEP_FLOOR: f32 = 1e-6;
 
 fn unpack_spring(t: vec4<u32>) -> SpringRef {
     return SpringRef(t.x, bitcast<f32>(t.y), bitcast<f32>(t.z), bitcast<f32>(t.w));
+}
+
+// A spring's law in its stretch s = |d| − L: linear, or buckling in compression (cpu:
+// src/cpu/spring_law.rs, which says why). From SimParams: a spring of rest length L buckles at
+// compression euler_onset / L and keeps buckled_fraction of its stiffness beyond (0: linear).
+struct SpringLaw {
+    euler_onset: f32,
+    buckled_fraction: f32,
+}
+
+// The compression at which a spring of rest length `rest` buckles, or -1 when springs are
+// linear.
+fn spring_onset(law: SpringLaw, rest: f32) -> f32 {
+    if (law.buckled_fraction > 0.0) {
+        return law.euler_onset / rest;
+    }
+    return -1.0;
+}
+
+// The spring's tension (N, positive pulls its ends together) at stretch s.
+fn spring_tension(law: SpringLaw, k: f32, rest: f32, s: f32) -> f32 {
+    let o = spring_onset(law, rest);
+    if (o >= 0.0 && s < -o) {
+        return -k * o + law.buckled_fraction * k * (s + o);
+    }
+    return k * s;
+}
+
+// d(tension)/ds at stretch s.
+fn spring_axial(law: SpringLaw, k: f32, rest: f32, s: f32) -> f32 {
+    let o = spring_onset(law, rest);
+    if (o >= 0.0 && s < -o) {
+        return law.buckled_fraction * k;
+    }
+    return k;
+}
+
+// The energy of a buckling spring at stretch s (onset o, buckled fraction r).
+fn buckled_energy(k: f32, o: f32, r: f32, s: f32) -> f32 {
+    if (s >= -o) {
+        return 0.5 * k * s * s;
+    }
+    let u = s + o;
+    return 0.5 * k * o * o - k * o * u + 0.5 * r * k * u * u;
+}
+
+// The change of the spring's energy from length len to len2 (dl = len2 − len, computed
+// without cancelling the two lengths): a product with dl where both are on one branch.
+fn spring_energy_change(law: SpringLaw, k: f32, rest: f32, len: f32, len2: f32, dl: f32) -> f32 {
+    let sum = len + len2 - 2.0 * rest;
+    let o = spring_onset(law, rest);
+    if (o < 0.0) {
+        return 0.5 * k * dl * sum;
+    }
+    let s1 = len - rest;
+    let s2 = len2 - rest;
+    let r = law.buckled_fraction;
+    if (s1 >= -o && s2 >= -o) {
+        return 0.5 * k * dl * sum;
+    }
+    if (s1 < -o && s2 < -o) {
+        return k * dl * (0.5 * r * (sum + 2.0 * o) - o);
+    }
+    return buckled_energy(k, o, r, s2) - buckled_energy(k, o, r, s1);
 }
 
 fn unpack_hinge(a: vec4<u32>, b: vec4<u32>) -> Hinge {

@@ -45,13 +45,13 @@ fn plane(b: u32, i: u32) -> vec4<f32> {
     return planes[b * params.num_particles + i];
 }
 
-// Hessian of ½k(|d| − L)² in d, made positive semi-definite (a compressed spring's transverse
-// term dropped).
-fn spring_hessian(k: f32, rest: f32, d: vec3<f32>, len: f32) -> mat3x3<f32> {
+// Hessian of a spring's energy in d, made positive semi-definite: axial·n̂n̂ᵀ (axial: the law's
+// d(tension)/ds) plus the transverse term, dropped for a compressed spring.
+fn spring_hessian(axial: f32, k: f32, rest: f32, d: vec3<f32>, len: f32) -> mat3x3<f32> {
     let n = d / len;
     let nn = outer(n, n);
     let transverse = max(1.0 - rest / len, 0.0);
-    return k * nn + (k * transverse) * (identity() - nn);
+    return axial * nn + (k * transverse) * (identity() - nn);
 }
 
 // Body b's surface velocity at vertex i's start of step (a deforming body's skin, not its root).
@@ -140,8 +140,11 @@ fn vertex_system(i: u32, bodies: u32, assembling: bool) -> VertexSystem {
         let start_len = length(start);
         var block = mat3x3<f32>();
         if (len > 1e-12) {
-            f = f - s.stiffness * stretch(start, start_len, change, len, s.rest_length) / len * e;
-            block = block + spring_hessian(s.stiffness, s.rest_length, e, len);
+            let law = SpringLaw(params.euler_onset, params.buckled_fraction);
+            let s_len = stretch(start, start_len, change, len, s.rest_length);
+            f = f - spring_tension(law, s.stiffness, s.rest_length, s_len) / len * e;
+            let axial = spring_axial(law, s.stiffness, s.rest_length, s_len);
+            block = block + spring_hessian(axial, s.stiffness, s.rest_length, e, len);
         }
         if (start_len > 1e-12) {
             let n = start / start_len;
@@ -345,7 +348,7 @@ fn seam_system(s: Seam) -> SeamSystem {
         let len = length(g.gap);
         if (len > rest) {
             fa = fa + s.stiffness * (len - rest) / len * g.gap;
-            ha = ha + spring_hessian(s.stiffness, rest, g.gap, len);
+            ha = ha + spring_hessian(s.stiffness, s.stiffness, rest, g.gap, len);
         }
     }
     return SeamSystem(fa, ha);

@@ -97,7 +97,8 @@ fn energy_change(i: u32) -> vec3<f32> {
             if (len + len2 > 0.0) {
                 dl = grow / (len + len2);
             }
-            let stretch = 0.5 * s.stiffness * dl * (len + len2 - 2.0 * s.rest_length);
+            let law = SpringLaw(params.euler_onset, params.buckled_fraction);
+            let stretch = spring_energy_change(law, s.stiffness, s.rest_length, len, len2, dl);
             let dn = a * dot(n, dc);
             out[k] = out[k] + (stretch + 0.5 * s.damping / h * dn * (2.0 * dot(n, change) + dn));
         }

@@ -27,7 +27,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             let dir = d / len;
             let stretch = len - s.rest_length;
             let closing_speed = dot(textureLoad(vel, texel(s.other), 0).xyz - vi, dir);
-            f = f + (s.stiffness * stretch + s.damping * closing_speed) * dir;
+            let law = SpringLaw(params.euler_onset, params.buckled_fraction);
+            let tension = spring_tension(law, s.stiffness, s.rest_length, stretch);
+            f = f + (tension + s.damping * closing_speed) * dir;
         }
     }
     textureStore(force_out, texel(i), vec4<f32>(previous_force(i) + f, 0.0));

@@ -1,5 +1,5 @@
 //! Checks against closed-form answers: discrete free fall, a hanging chain's static
-//! extensions, and the energy behaviour of both Euler integrators on an undamped spring.
+//! extensions, a loaded column's buckled compressions, and the energy behaviour of both Euler integrators on an undamped spring.
 
 mod common;
 
@@ -7,7 +7,7 @@ use common::{fixture, gpu};
 use drapekit::cpu::CpuSolver;
 use drapekit::gpu::GpuSolver;
 use drapekit::model::layout::{
-    SimParams, SubstepParams, INTEGRATOR_EXPLICIT, INTEGRATOR_SYMPLECTIC,
+    SimParams, SubstepParams, INTEGRATOR_EXPLICIT, INTEGRATOR_IMPLICIT, INTEGRATOR_SYMPLECTIC,
 };
 use drapekit::model::{ClothModel, Spring};
 use drapekit::plan::{Effects, Pass, PassPlan};
@@ -170,6 +170,106 @@ fn hanging_chain_settles_to_static_extensions_cpu() {
 fn hanging_chain_settles_to_static_extensions_gpu() {
     let Some(ctx) = gpu() else { return };
     chain_settles(|m, p, plan| Box::new(GpuSolver::new(ctx, m, p, plan, 1000).unwrap()));
+}
+
+/// A column under load: the chain of `chain_settles` with gravity turned upward and stiffer
+/// springs (k = 1000 N/m), so spring i carries the compressive load F = m·g·(n − i) of the
+/// particles below it (0.098–0.98 N); the chain stays on its axis, every force being along it.
+/// Its springs buckle (`compression = "buckling"`): onset o = 0.5 mm (β = o·L), so those
+/// loaded below k·o = 0.5 N compress by F/k and those above by o + (F − k·o)/(r·k), r the
+/// buckled fraction. Both branches are checked.
+fn column_settles(
+    integrator: u32,
+    dt: f32,
+    make: impl Fn(&ClothModel, SimParams, &PassPlan) -> Box<dyn Solver>,
+) {
+    let (n, m, k, l0, r) = (10usize, 0.01f32, 1000.0f32, 0.05f32, 0.03f32);
+    let onset = 5e-4f32;
+    let model = chain(n, m, k, l0, 0.05);
+    let implicit = integrator == INTEGRATOR_IMPLICIT;
+    let plan = PassPlan::new(
+        &model,
+        Effects {
+            implicit,
+            ..Effects::default()
+        },
+    );
+    let params = SimParams {
+        gravity: [0.0, 9.81, 0.0, 0.0],
+        num_particles: model.len() as u32,
+        integrator,
+        dt,
+        air_damping: 2.0,
+        iterations: 10,
+        euler_onset: onset * l0,
+        buckled_fraction: r,
+        ..Default::default()
+    };
+    let mut solver = make(&model, params, &plan);
+    // 20 s: the slowest mode decays at least as e^(−γt/2) = e^−20 under air damping γ = 2/s.
+    let per_second = (1.0 / dt).round() as u32;
+    for _ in 0..20 {
+        let steps: Vec<SubstepParams> = (0..per_second)
+            .map(|s| SubstepParams {
+                substep: s,
+                ..Default::default()
+            })
+            .collect();
+        solver.advance(&steps).unwrap();
+    }
+    let state = solver.state().unwrap();
+    let y: Vec<f32> = state.positions.iter().map(|p| p.y).collect();
+    // Float dead zone (see `chain_settles`): a step's change smaller than ½ulp(y) = 5.96e-8 m
+    // rounds away, so a particle can rest with a residual force up to what moves it that far
+    // in one step: m·γ·ulp/dt for symplectic Euler (damping holds the velocity), and
+    // (m/dt² + 2k)·ulp for implicit Euler (its step's stiffness). Spring i carries the
+    // residuals of the n − i particles below it over its own stiffness (k, or r·k buckled),
+    // plus one rounding of its length (2.4e-7 m).
+    let half_ulp = 5.96e-8;
+    let residual = if implicit {
+        (m / (dt * dt) + 2.0 * k) * half_ulp
+    } else {
+        m * params.air_damping * half_ulp / dt
+    };
+    let mut buckled = 0;
+    for i in 0..n {
+        let compression = l0 - (y[i] - y[i + 1]);
+        let load = m * 9.81 * (n - i) as f32;
+        let (expected, stiffness) = if load <= k * onset {
+            (load / k, k)
+        } else {
+            buckled += 1;
+            (onset + (load - k * onset) / (r * k), r * k)
+        };
+        let tol = (n - i) as f32 * residual / stiffness + 2.4e-7;
+        assert!(
+            (compression - expected).abs() <= tol,
+            "spring {i}: compression {compression} m, expected {expected} m (tol {tol} m)"
+        );
+    }
+    assert!(
+        buckled > 0 && buckled < n,
+        "{buckled} of {n} springs buckled"
+    );
+}
+
+#[test]
+fn loaded_column_buckles_at_the_euler_load_cpu() {
+    for (integrator, dt) in [(INTEGRATOR_SYMPLECTIC, 1e-3), (INTEGRATOR_IMPLICIT, 1e-2)] {
+        column_settles(integrator, dt, |m, p, plan| {
+            Box::new(CpuSolver::new(m, p, plan))
+        });
+    }
+}
+
+#[test]
+fn loaded_column_buckles_at_the_euler_load_gpu() {
+    let Some(ctx) = gpu() else { return };
+    for (integrator, dt) in [(INTEGRATOR_SYMPLECTIC, 1e-3), (INTEGRATOR_IMPLICIT, 1e-2)] {
+        column_settles(integrator, dt, |m, p, plan| {
+            Box::new(GpuSolver::new(ctx, m, p, plan, 1000).unwrap())
+        });
+    }
 }
 
 /// Energy ½kx² + ½mv² of one undamped spring (one end pinned) over 10⁵ steps.

@@ -31,6 +31,7 @@ fn sheet(fabric: Orthotropic, grain: f32) -> ClothModel {
         damping_ratio: 0.0,
         preset: None,
         membrane: Some(fabric),
+        buckling: false,
     };
     let mut model = ClothModel::from_mesh(&mesh, &fabric, &[]);
     model.set_grain(&world_grain(mesh.triangles.len(), grain, Vec3::Z), &fabric);

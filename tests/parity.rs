@@ -99,6 +99,26 @@ fn parity_spring_forces() {
     pass_parity(Pass::SpringForces);
 }
 
+/// The flag with springs that buckle: perturbed by 5 mm, a good share of its springs are
+/// compressed past their Euler onset (a micrometre or so), where the buckled branch of the
+/// law carries their force. The bound is `pass_parity_in`'s: the buckled tension
+/// −k·o + r·k·(s + o) carries the same relative rounding of s as k·s does.
+#[test]
+fn parity_spring_forces_buckling() {
+    let scene = common::scene_with_fabric("scenes/flag_wind.toml", common::BUCKLING);
+    let prep = prepare(&scene).unwrap();
+    assert!(prep.params.buckled_fraction > 0.0 && prep.params.euler_onset > 0.0);
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let state = perturbed(&cpu.state().unwrap(), 7, 5e-3, 0.5);
+    let buckled = common::buckled_springs(&prep, &state.positions);
+    assert!(
+        buckled * 5 > prep.model.springs.len(),
+        "only {buckled} of {} springs buckled",
+        prep.model.springs.len()
+    );
+    pass_parity_in(prep, Pass::SpringForces);
+}
+
 #[test]
 fn parity_bending_forces() {
     pass_parity(Pass::BendingForces);

@@ -30,6 +30,7 @@ pub fn bench_model(n: u32) -> (ClothModel, SimParams, PassPlan) {
         damping_ratio: 0.05,
         preset: None,
         membrane: None,
+        buckling: false,
     };
     let model = ClothModel::from_mesh(&mesh, &fabric, &[(n - 1) * n, n * n - 1]);
     let plan = PassPlan::new(

@@ -199,6 +199,10 @@ struct FabricArgs {
     /// the drape coefficient follows bending (the cantilevers measure the scaled rigidity).
     #[arg(long, value_parser = bending_scale)]
     bending_scale: Option<f64>,
+    /// How the springs take compression: linearly, or buckling at their strip's Euler load
+    /// (`[fabric] compression`; springs only).
+    #[arg(long, default_value = "linear", value_parser = ["linear", "buckling"])]
+    compression: String,
 }
 
 /// The command line as a reader would type it: `drapekit` and its arguments, whatever path
@@ -369,6 +373,14 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
             .map(|_| ())
         }
         (Some(BenchCommand::Fabric(f)), _) => {
+            if f.compression == "buckling" && f.fabric_model == "membrane" {
+                return Err(Error::Input(drapekit::error::InputError::new(
+                    std::path::Path::new("drapekit bench fabric"),
+                    "--compression",
+                    "buckling is built for edge springs; the membrane's compression is linear",
+                    "use --fabric-model springs with --compression buckling",
+                )));
+            }
             drapekit::bench::fabric::run_cli(&drapekit::bench::fabric::FabricOptions {
                 out: f.out,
                 quick: f.quick,
@@ -381,6 +393,7 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
                     max_frames: f.max_frames.unwrap_or(if f.quick { 96 } else { 480 }),
                     fabric_model: f.fabric_model,
                     bending_scale: f.bending_scale,
+                    buckling: f.compression == "buckling",
                 },
                 cusick_spacing: f.cusick_spacing_mm.map(|mm| mm * 1e-3),
                 tests: drapekit::bench::fabric::Tests {

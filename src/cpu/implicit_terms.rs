@@ -14,8 +14,8 @@
 //! The terms (each a potential in D within a step, so that a line search can compare
 //! energies):
 //! - inertia ½(m/h²)|D − Y|², Y = h·vₙ + h²·(g + f_wind/m); air damping ½(c·m/h)|D|²;
-//! - springs ½k(|d| − L)², Hessian made positive semi-definite (a compressed spring's
-//!   transverse term dropped), and damping ½(c/h)(n̂ₙ·(Dᵢ − Dⱼ))² along the spring's
+//! - springs ½k(|d| − L)², or buckling in compression (`spring_law`), Hessian made positive
+//!   semi-definite (a compressed spring's transverse term dropped), and damping ½(c/h)(n̂ₙ·(Dᵢ − Dⱼ))² along the spring's
 //!   direction at the start of the step n̂ₙ;
 //! - hinges w₀·ψ(θ), ψ = −2cos(θ/2) − sin(θ₀/2)·θ, whose gradient is the Bridson hinge force
 //!   w₀(sin(θ/2) − sin(θ₀/2))·u with the hinge's rest weight w₀ (`Hinge::rest_weight`);
@@ -33,6 +33,7 @@
 use super::hinge_forces::HingeFrame;
 use super::membrane::MembraneStep;
 use super::seam_forces::rest_gap;
+use super::spring_law;
 use crate::model::layout::{Hinge, Membrane, Seam, SimParams, SpringRef, SubstepParams};
 use crate::model::multigrid::ElementBlocks;
 use glam::{Mat3, Vec3, Vec3A, Vec4};
@@ -140,13 +141,14 @@ pub(crate) fn outer(a: Vec3, b: Vec3) -> Mat3 {
     Mat3::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
-/// Hessian of ½k(|d| − L)² in d, made positive semi-definite: k·(n̂n̂ᵀ + max(0, 1 − L/|d|)·
-/// (I − n̂n̂ᵀ)). The transverse term is negative for a compressed spring; it is dropped.
-fn spring_hessian(k: f32, rest: f32, d: Vec3, len: f32) -> Mat3 {
+/// Hessian of a spring's energy in d, made positive semi-definite: `axial`·n̂n̂ᵀ +
+/// k·max(0, 1 − L/|d|)·(I − n̂n̂ᵀ), with `axial` the law's d(tension)/ds (k when linear). The
+/// transverse term is negative for a compressed spring; it is dropped.
+fn spring_hessian(axial: f32, k: f32, rest: f32, d: Vec3, len: f32) -> Mat3 {
     let n = d / len;
     let nn = outer(n, n);
     let transverse = (1.0 - rest / len).max(0.0);
-    k * nn + (k * transverse) * (Mat3::IDENTITY - nn)
+    axial * nn + (k * transverse) * (Mat3::IDENTITY - nn)
 }
 
 /// A spring's stretch |e| − L for e = start + change, as (|start| − L) plus the change's
@@ -206,7 +208,7 @@ impl Implicit<'_> {
             let len = gap.length();
             if len > rest {
                 fa += s.stiffness * (len - rest) / len * gap;
-                ha += spring_hessian(s.stiffness, rest, gap, len);
+                ha += spring_hessian(s.stiffness, s.stiffness, rest, gap, len);
             }
         }
         (fa, ha)
@@ -290,8 +292,11 @@ impl Implicit<'_> {
             let start_len = start.length();
             let mut block = Mat3::ZERO;
             if len > 1e-12 {
-                f -= s.stiffness * stretch(start, start_len, change, len, s.rest_length) / len * e;
-                block += spring_hessian(s.stiffness, s.rest_length, e, len);
+                let (k, rest) = (s.stiffness, s.rest_length);
+                let stretch = stretch(start, start_len, change, len, rest);
+                f -= spring_law::tension(p, k, rest, stretch) / len * e;
+                let axial = spring_law::axial(p, k, rest, stretch);
+                block += spring_hessian(axial, k, rest, e, len);
             }
             if start_len > 1e-12 {
                 let n = start / start_len;
@@ -443,7 +448,8 @@ impl Implicit<'_> {
                 } else {
                     0.0
                 };
-                let stretch = 0.5 * s.stiffness * dl * (len + len2 - 2.0 * s.rest_length);
+                let stretch =
+                    spring_law::energy_change(p, s.stiffness, s.rest_length, len, len2, dl);
                 let dn = a * n.dot(dc);
                 *o += stretch + 0.5 * s.damping / h * dn * (2.0 * n.dot(change) + dn);
             }

@@ -36,6 +36,7 @@ mod seam_forces;
 mod self_collide;
 mod smooth;
 mod spring_forces;
+pub mod spring_law;
 mod strain_limit;
 mod vbd_finish;
 mod vbd_init;

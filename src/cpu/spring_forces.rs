@@ -1,6 +1,7 @@
 //! CPU twin of `kernels/spring_forces.wgsl`.
 
 use super::grain;
+use super::spring_law;
 use crate::model::layout::{SimParams, SpringRef};
 use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
@@ -34,7 +35,8 @@ pub fn spring_forces(
                     let dir = d / len;
                     let stretch = len - s.rest_length;
                     let closing_speed = (Vec3A::from_vec4(vel[s.other as usize]) - vi).dot(dir);
-                    f += (s.stiffness * stretch + s.damping * closing_speed) * dir;
+                    let tension = spring_law::tension(params, s.stiffness, s.rest_length, stretch);
+                    f += (tension + s.damping * closing_speed) * dir;
                 }
             }
             *force += f.extend(0.0);

@@ -145,6 +145,7 @@ mod tests {
             damping_ratio: 0.05,
             preset: None,
             membrane: None,
+            buckling: false,
         };
         let model = ClothModel::from_mesh(&mesh, &fabric, &[]);
         let coloring = model.vertex_coloring();

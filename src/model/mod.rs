@@ -139,6 +139,7 @@ impl ClothModel {
     ///     damping_ratio: 0.05,
     ///     preset: None,
     ///     membrane: None,
+    ///     buckling: false,
     /// };
     /// let model = ClothModel::from_mesh(&mesh, &fabric, &[0]);
     /// assert_eq!(model.len(), 121);
@@ -508,6 +509,7 @@ mod tests {
             damping_ratio: 0.0,
             preset: None,
             membrane: None,
+            buckling: false,
         };
         let model = ClothModel::from_mesh(&mesh, &fabric, &[]);
         let energy: f64 = model

@@ -310,6 +310,7 @@ mod tests {
             damping_ratio: 0.05,
             preset: None,
             membrane: None,
+            buckling: false,
         };
         let model = ClothModel::from_mesh(&mesh, &fabric, &[]);
         (model, Charted::grid(1.0, 1.0, columns, columns))

@@ -21,6 +21,9 @@ pub struct Fabric {
     /// The orthotropic membrane that replaces the isotropic edge springs (`model =
     /// "membrane"`); `None`: springs of `stretch_stiffness`.
     pub membrane: Option<Orthotropic>,
+    /// Edge springs buckle in compression (`compression = "buckling"`,
+    /// `cpu::spring_law`) rather than resist it linearly.
+    pub buckling: bool,
 }
 
 /// An orthotropic membrane's small-strain stiffness, in N/m: uniaxial along the warp and the
@@ -47,7 +50,26 @@ impl Orthotropic {
     }
 }
 
+/// The share of its stiffness a buckled spring keeps (`compression = "buckling"`): a
+/// numerical choice, not a measurement. Zero leaves the sweeps a direction without stiffness
+/// (measured: the solve diverged on the Cusick specimen); 0.1 still locked the drape of a limp
+/// fabric; 0.03 let the drape coefficient fall with bending down to a thirty-second of
+/// cotton's.
+pub const BUCKLED_FRACTION: f32 = 0.03;
+
 impl Fabric {
+    /// The springs' law in compression as (`SimParams::euler_onset`,
+    /// `SimParams::buckled_fraction`): with buckling, π²B/Y (B = the hinge coefficient over
+    /// `HINGE_PER_RIGIDITY`, 0 without bending) and `BUCKLED_FRACTION`; (0, 0) when linear.
+    pub fn spring_law(&self) -> (f32, f32) {
+        if !self.buckling {
+            return (0.0, 0.0);
+        }
+        let rigidity = self.bending_stiffness.unwrap_or(0.0) / HINGE_PER_RIGIDITY as f32;
+        let onset = std::f32::consts::PI.powi(2) * rigidity / self.stretch_stiffness;
+        (onset, BUCKLED_FRACTION)
+    }
+
     /// The stiffest stretch the cloth has, in N/m (the springs', or the membrane's stiffer
     /// axis): what the stable-step and memory estimates take.
     pub fn stiffest_stretch(&self) -> f32 {
@@ -166,7 +188,32 @@ pub(super) fn parse(c: &Checker, f: &RawFabric) -> Result<Fabric, InputError> {
         )?,
         preset: preset.map(|p| p.name),
         membrane: parse_membrane(c, f, preset)?,
+        buckling: parse_compression(c, f)?,
     })
+}
+
+/// `compression = "buckling"` (springs carry at most their strip's Euler load in compression)
+/// or `"linear"` (the default).
+fn parse_compression(c: &Checker, f: &RawFabric) -> Result<bool, InputError> {
+    match f.compression.as_deref() {
+        None | Some("linear") => Ok(false),
+        Some("buckling") if f.model.as_deref() == Some("membrane") => Err(c.err(
+            "fabric",
+            "compression",
+            "compression = \"buckling\" is built for edge springs; the membrane's compression is linear",
+            "remove compression, or use model = \"springs\"",
+        )),
+        Some("buckling") => Ok(true),
+        Some(other) => Err(c.err(
+            "fabric",
+            "compression",
+            format!(
+                "unknown compression {other:?}{}",
+                crate::suggest::did_you_mean(other, ["buckling", "linear"].into_iter())
+            ),
+            "use compression = \"buckling\" (compressed edges buckle at the Euler load) or \"linear\"",
+        )),
+    }
 }
 
 /// `model = "membrane"` (the orthotropic membrane, its warp, weft and shear stiffness from the

@@ -121,6 +121,7 @@ pub(super) struct RawFabric {
     pub(super) bending_stiffness_n_m: Option<f64>,
     pub(super) damping_ratio: Option<f64>,
     pub(super) model: Option<String>,
+    pub(super) compression: Option<String>,
     pub(super) warp_stiffness_n_m: Option<f64>,
     pub(super) weft_stiffness_n_m: Option<f64>,
     pub(super) shear_stiffness_n_m: Option<f64>,

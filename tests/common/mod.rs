@@ -339,3 +339,19 @@ impl Mannequin {
         text
     }
 }
+
+/// `compression = "buckling"`: `scene_with_fabric`'s line for springs that buckle.
+pub const BUCKLING: &str = "compression = \"buckling\"";
+
+/// How many of the model's springs are compressed past their Euler onset
+/// (`SimParams::euler_onset` / rest length) at `positions`: the buckled branch's share of a
+/// test.
+pub fn buckled_springs(prep: &drapekit::sim::Prepared, positions: &[glam::Vec4]) -> usize {
+    let onset_area = prep.params.euler_onset;
+    (prep.model.springs.iter())
+        .filter(|s| {
+            let [a, b] = s.ends.map(|e| positions[e as usize].truncate());
+            a.distance(b) - s.rest_length < -onset_area / s.rest_length
+        })
+        .count()
+}

@@ -70,6 +70,27 @@ fn parity_solve_stages_pinched() {
     check_stages("pinched", g.unwrap(), Case::new(prep, state, step));
 }
 
+/// The T-shirt with springs that buckle: perturbed by 5 mm, many springs are compressed past
+/// their Euler onset, where the force, the Hessian's axial term and the line search's energy
+/// change take the buckled branch.
+#[test]
+fn parity_solve_stages_buckling_tshirt() {
+    let Some(ctx) = gpu() else { return };
+    let scene = common::scene_with_fabric("scenes/tshirt_drape_cotton.toml", common::BUCKLING);
+    let (prep, state, step) = tshirt_with(scene);
+    let buckled = common::buckled_springs(&prep, &state.positions);
+    assert!(
+        buckled * 5 > prep.model.springs.len(),
+        "only {buckled} of {} springs buckled",
+        prep.model.springs.len()
+    );
+    let single = SolveOptions {
+        small_rows: u32::MAX,
+    };
+    let g = GpuSolver::with_options(ctx, &prep.model, prep.params, &prep.plan, 1, single);
+    check_stages("buckling tshirt", g.unwrap(), Case::new(prep, state, step));
+}
+
 /// The T-shirt as a cotton membrane with its warp at 30° on every panel: the membrane's terms
 /// in every stage, its blocks in the assembled matrix, and an empty spring list.
 #[test]

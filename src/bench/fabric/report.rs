@@ -166,7 +166,12 @@ fn stepping_text(s: &super::Stepping) -> String {
     let bending = s.bending_scale.map_or(String::new(), |f| {
         format!(", every preset's bending rigidity times {f} (B here and `preset_b_n_m` in fabric.csv are the scaled values)")
     });
-    stepping + model + &bending
+    let compression = if s.buckling {
+        ", springs that buckle in compression at their strip's Euler load"
+    } else {
+        ""
+    };
+    stepping + model + compression + &bending
 }
 
 pub(super) fn md_text(rows: &[FabricRow], opts: &FabricOptions) -> String {

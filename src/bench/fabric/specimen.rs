@@ -52,6 +52,8 @@ pub struct Stepping {
     pub fabric_model: String,
     /// The preset's bending rigidity times this (`None`: as the preset has it).
     pub bending_scale: Option<f64>,
+    /// The springs buckle in compression (`compression = "buckling"`).
+    pub buckling: bool,
 }
 
 /// The bending rigidity a specimen of `preset` is given, N·m: the preset's, times
@@ -149,8 +151,8 @@ fn pattern_json(outline: Outline) -> String {
     )
 }
 
-/// The `[fabric]` lines after the preset: the model, the grain and, for a strip whose stretch
-/// is capped at `stretch`, the capped values.
+/// The `[fabric]` lines after the preset: the scaled bending, the compression, the model, the
+/// grain and, for a strip whose stretch is capped at `stretch`, the capped values.
 fn fabric_lines(preset: &str, stretch: Option<f64>, grain_deg: f64, step: &Stepping) -> String {
     let mut s = String::new();
     if let (Some(f), Some(p)) = (step.bending_scale, crate::scene::preset(preset)) {
@@ -166,6 +168,9 @@ fn fabric_lines(preset: &str, stretch: Option<f64>, grain_deg: f64, step: &Stepp
             "# Softer than the preset: see docs/src/benchmarks/fabric.md.\n\
              stretch_stiffness_n_m = {k}\n"
         );
+    }
+    if step.buckling {
+        s += "compression = \"buckling\"\n";
     }
     if step.fabric_model == "membrane" {
         s += &format!("model = \"membrane\"\ngrain_deg = {grain_deg}\n");
