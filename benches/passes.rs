@@ -347,6 +347,7 @@ fn model_build(c: &mut Criterion) {
         damping_ratio: 0.05,
         preset: None,
         membrane: None,
+        buckling: false,
     };
     for n in [256u32, 1024] {
         let origin = glam::Vec3::new(0.0, 1.0, 0.0);
