@@ -538,3 +538,21 @@ fn a_closed_stdout_ends_the_command_quietly() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+#[test]
+fn the_buckling_hires_shirt_is_the_hires_shirt_with_springs_that_buckle() {
+    // The two scenes the book compares must stay one garment: parsed, they differ in the
+    // fabric's compression law alone.
+    let load = |name: &str| Scene::load(&common::fixture(&format!("scenes/{name}.toml"))).unwrap();
+    let (linear, mut buckling) = (
+        load("tshirt_drape_hires"),
+        load("tshirt_drape_hires_buckling"),
+    );
+    assert!(!linear.fabric.buckling && buckling.fabric.buckling);
+    buckling.fabric.buckling = false;
+    // Their files, text and default output folders are their own.
+    buckling.path = linear.path.clone();
+    buckling.source = linear.source.clone();
+    buckling.output.dir = linear.output.dir.clone();
+    assert_eq!(buckling, linear);
+}
