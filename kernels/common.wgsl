@@ -36,9 +36,9 @@ struct SimParams {
     num_bodies: u32,             // collision bodies in `bodies`
     smoothing: u32,              // implicit Euler with coarse levels: fine sweeps around each coarse correction
     euler_onset: f32,            // m², π²B/Y: a spring of rest length L buckles at compression euler_onset / L
-    buckled_fraction: f32,       // 1, stiffness a buckled spring keeps beyond (0: springs linear in compression)
+    membrane_onset: f32,         // N·m, (√3/4)π²B: a membrane condition of stiffness K buckles at strain membrane_onset / K
+    buckled_fraction: f32,       // 1, stiffness a buckled element keeps beyond (0: linear in compression)
     _pad0: u32,
-    _pad1: u32,
     bodies: array<BodyParams, MAX_BODIES>,
 }
 
@@ -141,68 +141,56 @@ fn unpack_spring(t: vec4<u32>) -> SpringRef {
     return SpringRef(t.x, bitcast<f32>(t.y), bitcast<f32>(t.z), bitcast<f32>(t.w));
 }
 
-// A spring's law in its stretch s = |d| − L: linear, or buckling in compression (cpu:
-// src/cpu/spring_law.rs, which says why). From SimParams: a spring of rest length L buckles at
-// compression euler_onset / L and keeps buckled_fraction of its stiffness beyond (0: linear).
-struct SpringLaw {
-    euler_onset: f32,
-    buckled_fraction: f32,
+// How cloth takes compression: linearly, or buckling (cpu: src/cpu/compression_law.rs, which
+// says why), for a spring's stretch |d| − L (onset params.euler_onset / L) and a membrane
+// condition's strain |w| − 1 (onset params.membrane_onset / K) alike.
+struct CompressionLaw {
+    onset: f32,                  // the compression at which the element buckles
+    fraction: f32,               // the share of its stiffness it keeps beyond (0: linear)
 }
 
-// The compression at which a spring of rest length `rest` buckles, or -1 when springs are
-// linear.
-fn spring_onset(law: SpringLaw, rest: f32) -> f32 {
-    if (law.buckled_fraction > 0.0) {
-        return law.euler_onset / rest;
-    }
-    return -1.0;
+fn law_buckled(law: CompressionLaw, s: f32) -> bool {
+    return law.fraction > 0.0 && s < -law.onset;
 }
 
-// The spring's tension (N, positive pulls its ends together) at stretch s.
-fn spring_tension(law: SpringLaw, k: f32, rest: f32, s: f32) -> f32 {
-    let o = spring_onset(law, rest);
-    if (o >= 0.0 && s < -o) {
-        return -k * o + law.buckled_fraction * k * (s + o);
+// The element's tension at stretch s for stiffness k (positive pulls).
+fn law_tension(law: CompressionLaw, k: f32, s: f32) -> f32 {
+    if (law_buckled(law, s)) {
+        return -k * law.onset + law.fraction * k * (s + law.onset);
     }
     return k * s;
 }
 
 // d(tension)/ds at stretch s.
-fn spring_axial(law: SpringLaw, k: f32, rest: f32, s: f32) -> f32 {
-    let o = spring_onset(law, rest);
-    if (o >= 0.0 && s < -o) {
-        return law.buckled_fraction * k;
+fn law_axial(law: CompressionLaw, k: f32, s: f32) -> f32 {
+    if (law_buckled(law, s)) {
+        return law.fraction * k;
     }
     return k;
 }
 
-// The energy of a buckling spring at stretch s (onset o, buckled fraction r).
-fn buckled_energy(k: f32, o: f32, r: f32, s: f32) -> f32 {
-    if (s >= -o) {
-        return 0.5 * k * s * s;
+// The energy at stretch s.
+fn law_energy(law: CompressionLaw, k: f32, s: f32) -> f32 {
+    if (law_buckled(law, s)) {
+        let o = law.onset;
+        let u = s + o;
+        return 0.5 * k * o * o - k * o * u + 0.5 * law.fraction * k * u * u;
     }
-    let u = s + o;
-    return 0.5 * k * o * o - k * o * u + 0.5 * r * k * u * u;
+    return 0.5 * k * s * s;
 }
 
-// The change of the spring's energy from length len to len2 (dl = len2 − len, computed
-// without cancelling the two lengths): a product with dl where both are on one branch.
-fn spring_energy_change(law: SpringLaw, k: f32, rest: f32, len: f32, len2: f32, dl: f32) -> f32 {
-    let sum = len + len2 - 2.0 * rest;
-    let o = spring_onset(law, rest);
-    if (o < 0.0) {
-        return 0.5 * k * dl * sum;
+// The change of the energy from stretch s1 to s2 = s1 + ds, sum = s1 + s2 as the caller
+// computes it without cancellation: a product with ds where both are on one branch.
+fn law_energy_change(law: CompressionLaw, k: f32, s1: f32, s2: f32, sum: f32, ds: f32) -> f32 {
+    let b1 = law_buckled(law, s1);
+    let b2 = law_buckled(law, s2);
+    if (!b1 && !b2) {
+        return 0.5 * k * ds * sum;
     }
-    let s1 = len - rest;
-    let s2 = len2 - rest;
-    let r = law.buckled_fraction;
-    if (s1 >= -o && s2 >= -o) {
-        return 0.5 * k * dl * sum;
+    if (b1 && b2) {
+        return k * ds * (0.5 * law.fraction * (sum + 2.0 * law.onset) - law.onset);
     }
-    if (s1 < -o && s2 < -o) {
-        return k * dl * (0.5 * r * (sum + 2.0 * o) - o);
-    }
-    return buckled_energy(k, o, r, s2) - buckled_energy(k, o, r, s1);
+    return law_energy(law, k, s2) - law_energy(law, k, s1);
 }
 
 fn unpack_hinge(a: vec4<u32>, b: vec4<u32>) -> Hinge {

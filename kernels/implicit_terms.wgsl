@@ -140,10 +140,10 @@ fn vertex_system(i: u32, bodies: u32, assembling: bool) -> VertexSystem {
         let start_len = length(start);
         var block = mat3x3<f32>();
         if (len > 1e-12) {
-            let law = SpringLaw(params.euler_onset, params.buckled_fraction);
+            let law = CompressionLaw(params.euler_onset / s.rest_length, params.buckled_fraction);
             let s_len = stretch(start, start_len, change, len, s.rest_length);
-            f = f - spring_tension(law, s.stiffness, s.rest_length, s_len) / len * e;
-            let axial = spring_axial(law, s.stiffness, s.rest_length, s_len);
+            f = f - law_tension(law, s.stiffness, s_len) / len * e;
+            let axial = law_axial(law, s.stiffness, s_len);
             block = block + spring_hessian(axial, s.stiffness, s.rest_length, e, len);
         }
         if (start_len > 1e-12) {
@@ -453,10 +453,11 @@ fn membrane_stretch(s: vec3<f32>, dw: vec3<f32>) -> f32 {
     return stretch(s, length(s), dw, length(s + dw), 1.0);
 }
 
-// Hessian of ½(|w| − 1)² in w, made positive semi-definite (cpu: membrane::stretch_hessian).
-fn membrane_stretch_hessian(n: vec3<f32>, len: f32) -> mat3x3<f32> {
+// Hessian of a stretch condition's energy per unit stiffness in w, made positive semi-definite,
+// with axial the law's d(tension)/ds per unit stiffness (cpu: membrane::stretch_hessian).
+fn membrane_stretch_hessian(axial: f32, n: vec3<f32>, len: f32) -> mat3x3<f32> {
     let nn = outer(n, n);
-    return nn + max(1.0 - 1.0 / len, 0.0) * (identity() - nn);
+    return axial * nn + max(1.0 - 1.0 / len, 0.0) * (identity() - nn);
 }
 
 // A membrane's force on one vertex and its Hessian blocks towards the triangle's three
@@ -482,8 +483,10 @@ fn add_stretch_condition(
     let cr = c[role];
     if (len > 1e-12) {
         let n = w / len;
-        (*sys).f = (*sys).f - k * cr * membrane_stretch(s, dw) * n;
-        let hess = k * membrane_stretch_hessian(n, len);
+        let law = CompressionLaw(params.membrane_onset / k, params.buckled_fraction);
+        let strain = membrane_stretch(s, dw);
+        (*sys).f = (*sys).f - k * cr * law_tension(law, 1.0, strain) * n;
+        let hess = k * membrane_stretch_hessian(law_axial(law, 1.0, strain), n, len);
         for (var o = 0u; o < 3u; o = o + 1u) {
             (*sys).blocks[o] = (*sys).blocks[o] + (cr * c[o]) * hess;
         }
@@ -534,7 +537,9 @@ fn add_stretch_change(e_in: f32, s: vec3<f32>, dw: vec3<f32>, step: vec3<f32>, k
     if (len + len2 > 0.0) {
         ds = grow / (len + len2);
     }
-    var e = e_in + 0.5 * k * ds * (2.0 * membrane_stretch(s, dw) + ds);
+    let law = CompressionLaw(params.membrane_onset / k, params.buckled_fraction);
+    let strain = membrane_stretch(s, dw);
+    var e = e_in + law_energy_change(law, k, strain, strain + ds, 2.0 * strain + ds, ds);
     let start_len = length(s);
     if (start_len > 1e-12) {
         let n = s / start_len;

@@ -97,8 +97,9 @@ fn energy_change(i: u32) -> vec3<f32> {
             if (len + len2 > 0.0) {
                 dl = grow / (len + len2);
             }
-            let law = SpringLaw(params.euler_onset, params.buckled_fraction);
-            let stretch = spring_energy_change(law, s.stiffness, s.rest_length, len, len2, dl);
+            let rest = s.rest_length;
+            let law = CompressionLaw(params.euler_onset / rest, params.buckled_fraction);
+            let stretch = law_energy_change(law, s.stiffness, len - rest, len2 - rest, len + len2 - 2.0 * rest, dl);
             let dn = a * dot(n, dc);
             out[k] = out[k] + (stretch + 0.5 * s.damping / h * dn * (2.0 * dot(n, change) + dn));
         }

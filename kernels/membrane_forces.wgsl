@@ -29,14 +29,17 @@ fn membrane_image(m: Membrane, c1: f32, c2: f32, which: u32) -> vec3<f32> {
     return c1 * (x1 - x0) + c2 * (x2 - x0);
 }
 
-// One stretch condition's force on a vertex with coefficient c: −k·c·((|w| − 1) + τ·n̂·ẇ)·n̂.
+// One stretch condition's force on a vertex with coefficient c: −k·c·(t(|w| − 1) + τ·n̂·ẇ)·n̂,
+// t the compression law's tension per unit stiffness (the strain itself when linear).
 fn stretch_condition(w: vec3<f32>, dw: vec3<f32>, k: f32, c: f32, tau: f32) -> vec3<f32> {
     let len = length(w);
     if (len <= 1e-12) {
         return vec3<f32>(0.0);
     }
     let n = w / len;
-    return -k * c * ((len - 1.0) + tau * dot(n, dw)) * n;
+    let law = CompressionLaw(params.membrane_onset / k, params.buckled_fraction);
+    let strain = law_tension(law, 1.0, len - 1.0);
+    return -k * c * (strain + tau * dot(n, dw)) * n;
 }
 
 fn membrane_force(m: Membrane, role: u32) -> vec3<f32> {

@@ -27,8 +27,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             let dir = d / len;
             let stretch = len - s.rest_length;
             let closing_speed = dot(textureLoad(vel, texel(s.other), 0).xyz - vi, dir);
-            let law = SpringLaw(params.euler_onset, params.buckled_fraction);
-            let tension = spring_tension(law, s.stiffness, s.rest_length, stretch);
+            let law = CompressionLaw(params.euler_onset / s.rest_length, params.buckled_fraction);
+            let tension = law_tension(law, s.stiffness, stretch);
             f = f + (tension + s.damping * closing_speed) * dir;
         }
     }

@@ -60,9 +60,9 @@ fn sim_params_layout() {
             ("num_bodies", offset_of!(SimParams, num_bodies)),
             ("smoothing", offset_of!(SimParams, smoothing)),
             ("euler_onset", offset_of!(SimParams, euler_onset)),
+            ("membrane_onset", offset_of!(SimParams, membrane_onset)),
             ("buckled_fraction", offset_of!(SimParams, buckled_fraction)),
             ("_pad0", offset_of!(SimParams, _pad0)),
-            ("_pad1", offset_of!(SimParams, _pad1)),
             ("bodies", offset_of!(SimParams, bodies)),
         ],
     );

@@ -6,7 +6,7 @@
 
 use drapekit::cpu::membrane::{image, membrane_force, MembraneStep};
 use drapekit::mesh::{GridPlane, TriMesh};
-use drapekit::model::layout::Membrane;
+use drapekit::model::layout::{Membrane, SimParams};
 use drapekit::model::membrane::world_grain;
 use drapekit::model::ClothModel;
 use drapekit::scene::{Fabric, Orthotropic, Scene};
@@ -41,6 +41,11 @@ fn sheet(fabric: Orthotropic, grain: f32) -> ClothModel {
 /// The membrane's energy when the sheet at rest `x` is displaced by `u` (the conditions'
 /// change from rest, as the line search computes it).
 fn energy(model: &ClothModel, x: &[Vec4], u: &[Vec4]) -> f32 {
+    energy_with(&SimParams::default(), model, x, u)
+}
+
+/// `energy` under the compression law of `p`.
+fn energy_with(p: &SimParams, model: &ClothModel, x: &[Vec4], u: &[Vec4]) -> f32 {
     let zero = vec![Vec4::ZERO; x.len()];
     model
         .membranes
@@ -48,7 +53,7 @@ fn energy(model: &ClothModel, x: &[Vec4], u: &[Vec4]) -> f32 {
         .map(|m| {
             let step = MembraneStep::at(m, x, &zero);
             let dw = [image(m, &step.a, u), image(m, &step.b, u)];
-            step.energy_change(m, dw, 1.0)
+            step.energy_change(p, m, dw, 1.0)
         })
         .sum()
 }
@@ -142,6 +147,37 @@ fn deformed(amount: f32, seed: u32) -> (ClothModel, Vec<Vec4>) {
 
 #[test]
 fn force_is_minus_the_energy_gradient() {
+    force_is_minus_the_energy_gradient_with(&SimParams::default());
+}
+
+/// The same with conditions that buckle at 1% compression (K = k·A ≈ 4000 N/m × 2e-3 m² =
+/// 8 N·m, onset 0.08 N·m / K): the sheet's 4 mm noise over 6 cm edges compresses many of
+/// them past it, so the forces and the energy take the buckled branch.
+#[test]
+fn force_is_minus_the_energy_gradient_with_buckling() {
+    let p = SimParams {
+        membrane_onset: 0.08,
+        buckled_fraction: 0.03,
+        ..Default::default()
+    };
+    let (model, x) = deformed(4e-3, 7);
+    let zero = vec![Vec4::ZERO; x.len()];
+    let buckled = (model.membranes.iter())
+        .flat_map(|m| {
+            let step = MembraneStep::at(m, &x, &zero);
+            [(0, m.stiffness[0]), (1, m.stiffness[1])]
+                .map(|(c, k)| step.stretch(c) < -p.membrane_onset / k)
+        })
+        .filter(|&b| b)
+        .count();
+    assert!(
+        buckled * 10 > model.membranes.len(),
+        "{buckled} conditions buckled"
+    );
+    force_is_minus_the_energy_gradient_with(&p);
+}
+
+fn force_is_minus_the_energy_gradient_with(p: &SimParams) {
     let (model, x) = deformed(4e-3, 7);
     let vel = vec![Vec4::ZERO; x.len()];
     let csr = model.membrane_csr();
@@ -151,6 +187,7 @@ fn force_is_minus_the_energy_gradient() {
         let mut f = Vec3::ZERO;
         for &r in &csr.items[csr.offsets[i] as usize..csr.offsets[i + 1] as usize] {
             f += membrane_force(
+                p,
                 &model.membranes[(r / 4) as usize],
                 (r % 4) as usize,
                 &x,
@@ -161,9 +198,9 @@ fn force_is_minus_the_energy_gradient() {
         for axis in 0..3 {
             let mut u = zero.clone();
             u[i][axis] = h;
-            let plus = energy(&model, &x, &u);
+            let plus = energy_with(p, &model, &x, &u);
             u[i][axis] = -h;
-            let minus = energy(&model, &x, &u);
+            let minus = energy_with(p, &model, &x, &u);
             grad[axis] = (plus - minus) / (2.0 * h);
         }
         // Central differences err by h²·|∂³E| (a 6 cm element's third derivative, k·A/L³ ≈
@@ -194,6 +231,7 @@ fn hessian_blocks_are_the_force_derivative_under_pure_warp_stretch() {
         let mut f = Vec3::ZERO;
         for &r in &csr.items[csr.offsets[i] as usize..csr.offsets[i + 1] as usize] {
             f += membrane_force(
+                &SimParams::default(),
                 &model.membranes[(r / 4) as usize],
                 (r % 4) as usize,
                 x,
@@ -208,11 +246,12 @@ fn hessian_blocks_are_the_force_derivative_under_pure_warp_stretch() {
     for &r in &csr.items[csr.offsets[i] as usize..csr.offsets[i + 1] as usize] {
         let m: &Membrane = &model.membranes[(r / 4) as usize];
         let role = (r % 4) as usize;
-        let (f, blocks) = MembraneStep::at(m, &x, &zero).system(m, role, 1.0);
+        let (f, blocks) =
+            MembraneStep::at(m, &x, &zero).system(&SimParams::default(), m, role, 1.0);
         block += blocks[role];
         // Implicit Euler's force and the explicit integrators' are one function (τ = 0), per
         // triangle (the interior vertex's sum is zero under a uniform stretch): a few ulps.
-        let explicit = membrane_force(m, role, &x, &vel);
+        let explicit = membrane_force(&SimParams::default(), m, role, &x, &vel);
         assert!(
             (f - explicit).length() <= 1e-5 * explicit.length(),
             "{f} vs {explicit}"
@@ -253,6 +292,7 @@ fn rigid_rotation_costs_nothing() {
         let mut f = Vec3::ZERO;
         for &r in &csr.items[csr.offsets[i] as usize..csr.offsets[i + 1] as usize] {
             f += membrane_force(
+                &SimParams::default(),
                 &model.membranes[(r / 4) as usize],
                 (r % 4) as usize,
                 &x,

@@ -271,6 +271,27 @@ fn parity_membrane_forces() {
     pass_parity_in(prep, Pass::MembraneForces);
 }
 
+/// The membrane sheet with conditions that buckle: the 5 mm perturbation compresses many of
+/// them past their Euler strain (about 1e-4 here), where the law's buckled branch carries
+/// their force. The bound is `parity_membrane_forces`'s: the buckled tension carries the same
+/// rounding of the strain as the linear one.
+#[test]
+fn parity_membrane_forces_buckling() {
+    let mut scene = membrane_sheet(32);
+    scene.fabric.buckling = true;
+    let prep = prepare(&scene).unwrap();
+    assert!(prep.params.membrane_onset > 0.0 && prep.params.buckled_fraction > 0.0);
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let state = perturbed(&cpu.state().unwrap(), 7, 5e-3, 0.5);
+    let buckled = common::buckled_conditions(&prep, &state.positions);
+    let conditions = 2 * prep.model.membranes.len();
+    assert!(
+        buckled * 5 > conditions,
+        "only {buckled} of {conditions} buckled"
+    );
+    pass_parity_in(prep, Pass::MembraneForces);
+}
+
 #[test]
 fn parity_strain_limit() {
     // The 5 mm perturbation stretches the flag's 4.3 cm edges by up to 23%: past the 10% limit.

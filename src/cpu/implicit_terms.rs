@@ -14,7 +14,7 @@
 //! The terms (each a potential in D within a step, so that a line search can compare
 //! energies):
 //! - inertia ½(m/h²)|D − Y|², Y = h·vₙ + h²·(g + f_wind/m); air damping ½(c·m/h)|D|²;
-//! - springs ½k(|d| − L)², or buckling in compression (`spring_law`), Hessian made positive
+//! - springs ½k(|d| − L)², or buckling in compression (`compression_law`), Hessian made positive
 //!   semi-definite (a compressed spring's transverse term dropped), and damping ½(c/h)(n̂ₙ·(Dᵢ − Dⱼ))² along the spring's
 //!   direction at the start of the step n̂ₙ;
 //! - hinges w₀·ψ(θ), ψ = −2cos(θ/2) − sin(θ₀/2)·θ, whose gradient is the Bridson hinge force
@@ -30,10 +30,10 @@
 //!   f₀(s) = s²/(2ε) below ε = ε_v·h, s − ε/2 above: Coulomb friction, static (proportional to
 //!   the slip) below the slip speed ε_v.
 
+use super::compression_law::CompressionLaw;
 use super::hinge_forces::HingeFrame;
 use super::membrane::MembraneStep;
 use super::seam_forces::rest_gap;
-use super::spring_law;
 use crate::model::layout::{Hinge, Membrane, Seam, SimParams, SpringRef, SubstepParams};
 use crate::model::multigrid::ElementBlocks;
 use glam::{Mat3, Vec3, Vec3A, Vec4};
@@ -294,8 +294,9 @@ impl Implicit<'_> {
             if len > 1e-12 {
                 let (k, rest) = (s.stiffness, s.rest_length);
                 let stretch = stretch(start, start_len, change, len, rest);
-                f -= spring_law::tension(p, k, rest, stretch) / len * e;
-                let axial = spring_law::axial(p, k, rest, stretch);
+                let law = CompressionLaw::spring(p, rest);
+                f -= law.tension(k, stretch) / len * e;
+                let axial = law.axial(k, stretch);
                 block += spring_hessian(axial, k, rest, e, len);
             }
             if start_len > 1e-12 {
@@ -338,7 +339,7 @@ impl Implicit<'_> {
                 let r = refs[k as usize];
                 let m = &membranes[(r / 4) as usize];
                 let role = (r % 4) as usize;
-                let (fm, mb) = MembraneStep::at(m, self.prev, d).system(m, role, h);
+                let (fm, mb) = MembraneStep::at(m, self.prev, d).system(p, m, role, h);
                 f += fm;
                 hess += mb[role];
                 if let Some(b) = blocks {
@@ -439,6 +440,8 @@ impl Implicit<'_> {
             } else {
                 Vec3::ZERO
             };
+            let rest = s.rest_length;
+            let law = CompressionLaw::spring(p, rest);
             for (o, &a) in out.iter_mut().zip(&alphas) {
                 let grow = 2.0 * a * e.dot(dc) + a * a * dc.length_squared();
                 let len2 = (e + a * dc).length();
@@ -448,8 +451,8 @@ impl Implicit<'_> {
                 } else {
                     0.0
                 };
-                let stretch =
-                    spring_law::energy_change(p, s.stiffness, s.rest_length, len, len2, dl);
+                let sum = len + len2 - 2.0 * rest;
+                let stretch = law.energy_change(s.stiffness, len - rest, len2 - rest, sum, dl);
                 let dn = a * n.dot(dc);
                 *o += stretch + 0.5 * s.damping / h * dn * (2.0 * n.dot(change) + dn);
             }
@@ -480,7 +483,7 @@ impl Implicit<'_> {
                     super::membrane::image(m, &step.b, c),
                 ];
                 for (o, &a) in out.iter_mut().zip(&alphas) {
-                    *o += step.energy_change(m, [a * dw[0], a * dw[1]], h);
+                    *o += step.energy_change(p, m, [a * dw[0], a * dw[1]], h);
                 }
             }
         }

@@ -11,10 +11,15 @@
 //! (Gauss–Newton). Damping is stiffness-proportional with each triangle's time constant τ
 //! (`model::membrane`), along the conditions' gradients.
 //!
+//! With `compression = "buckling"` each stretch condition takes compression by
+//! `compression_law` (its strip's Euler strain, then a small fraction of its stiffness).
+//!
 //! Known limits: the stiffness is linear in strain (the measured curves stiffen, Wang et al.
-//! 2011); |w_u| − 1 does not resist compression any differently from stretch (buckling is left
-//! to bending); large shear couples with stretch through w_u·w_v = |w_u||w_v|cos.
+//! 2011); buckling acts on the warp and the weft conditions each, not on the principal
+//! compression (shear is linear); large shear couples with stretch through w_u·w_v =
+//! |w_u||w_v|cos.
 
+use super::compression_law::CompressionLaw;
 use super::grain;
 use crate::model::layout::{Membrane, SimParams};
 use glam::{Mat3, Vec3, Vec4};
@@ -32,7 +37,13 @@ pub fn image(m: &Membrane, c: &[f32; 3], values: &[Vec4]) -> Vec3 {
 }
 
 /// The force of membrane `m` on its vertex `role` at positions `pos` and velocities `vel`.
-pub fn membrane_force(m: &Membrane, role: usize, pos: &[Vec4], vel: &[Vec4]) -> Vec3 {
+pub fn membrane_force(
+    p: &SimParams,
+    m: &Membrane,
+    role: usize,
+    pos: &[Vec4],
+    vel: &[Vec4],
+) -> Vec3 {
     let (a, b) = m.coefficients();
     let [ku, kv, ks, tau] = m.stiffness;
     let (wu, wv) = (image(m, &a, pos), image(m, &b, pos));
@@ -43,7 +54,9 @@ pub fn membrane_force(m: &Membrane, role: usize, pos: &[Vec4], vel: &[Vec4]) -> 
         let len = w.length();
         if len > 1e-12 {
             let n = w / len;
-            f -= k * c * ((len - 1.0) + tau * n.dot(dw)) * n;
+            // The law's tension per unit stiffness: the strain itself when linear.
+            let strain = CompressionLaw::membrane(p, k).tension(1.0, len - 1.0);
+            f -= k * c * (strain + tau * n.dot(dw)) * n;
         }
     }
     f
@@ -69,16 +82,19 @@ pub fn membrane_forces(
         .for_each(|(i, force)| {
             let mut f = Vec3::ZERO;
             for &r in &refs[offsets[i] as usize..offsets[i + 1] as usize] {
-                f += membrane_force(&membranes[(r / 4) as usize], (r % 4) as usize, pos, vel);
+                let m = &membranes[(r / 4) as usize];
+                f += membrane_force(params, m, (r % 4) as usize, pos, vel);
             }
             *force += f.extend(0.0);
         });
 }
 
-/// Hessian of ½(|w| − 1)² in w, made positive semi-definite: n̂n̂ᵀ + max(0, 1 − 1/|w|)·(I − n̂n̂ᵀ).
-pub fn stretch_hessian(n: Vec3, len: f32) -> Mat3 {
+/// Hessian of a stretch condition's energy per unit stiffness in w, made positive
+/// semi-definite: `axial`·n̂n̂ᵀ + max(0, 1 − 1/|w|)·(I − n̂n̂ᵀ), `axial` the law's d(tension)/ds
+/// per unit stiffness (1 when linear).
+pub fn stretch_hessian(axial: f32, n: Vec3, len: f32) -> Mat3 {
     let nn = super::implicit_terms::outer(n, n);
-    nn + (1.0 - 1.0 / len).max(0.0) * (Mat3::IDENTITY - nn)
+    axial * nn + (1.0 - 1.0 / len).max(0.0) * (Mat3::IDENTITY - nn)
 }
 
 /// One membrane in implicit Euler's step: its conditions at the start of the step and at
@@ -141,7 +157,7 @@ impl MembraneStep {
     /// membrane `m` in a step of `h` s: the elastic conditions at the iterate, and damping
     /// ½(τ/h)·k·q² on each condition's change q over the step, linearised at the step's start
     /// (a quadratic in D, as the springs' damping is).
-    pub fn system(&self, m: &Membrane, role: usize, h: f32) -> (Vec3, [Mat3; 3]) {
+    pub fn system(&self, p: &SimParams, m: &Membrane, role: usize, h: f32) -> (Vec3, [Mat3; 3]) {
         let [ku, kv, ks, tau] = m.stiffness;
         let damp = tau / h;
         let w = self.images();
@@ -152,8 +168,9 @@ impl MembraneStep {
             let cr = self.coefficient(c, role);
             if len > 1e-12 {
                 let n = w[c] / len;
-                f -= k * cr * self.stretch(c) * n;
-                let hess = k * stretch_hessian(n, len);
+                let (law, s) = (CompressionLaw::membrane(p, k), self.stretch(c));
+                f -= k * cr * law.tension(1.0, s) * n;
+                let hess = k * stretch_hessian(law.axial(1.0, s), n, len);
                 for (s, block) in blocks.iter_mut().enumerate() {
                     *block += (cr * self.coefficient(c, s)) * hess;
                 }
@@ -184,7 +201,7 @@ impl MembraneStep {
     /// The change of the membrane's energy (elastic and damping) when its images change by
     /// `dw` (the correction's images times the step length), as differences of nearby
     /// quantities.
-    pub fn energy_change(&self, m: &Membrane, dw: [Vec3; 2], h: f32) -> f32 {
+    pub fn energy_change(&self, p: &SimParams, m: &Membrane, dw: [Vec3; 2], h: f32) -> f32 {
         let [ku, kv, ks, tau] = m.stiffness;
         let damp = tau / h;
         let w = self.images();
@@ -198,7 +215,8 @@ impl MembraneStep {
             } else {
                 0.0
             };
-            e += 0.5 * k * ds * (2.0 * self.stretch(c) + ds);
+            let s = self.stretch(c);
+            e += CompressionLaw::membrane(p, k).energy_change(k, s, s + ds, 2.0 * s + ds, ds);
             let start_len = self.start[c].length();
             if start_len > 1e-12 {
                 let n = self.start[c] / start_len;

@@ -43,18 +43,18 @@ pub struct SimParams {
     /// Implicit Euler with coarse levels: fine sweeps before each coarse correction and after
     /// the last one.
     pub smoothing: u32,
-    /// Springs that buckle (`[fabric] compression = "buckling"`): π²B/Y in m², B the bending
-    /// rigidity and Y the stretch stiffness. A spring of rest length L carries at most the
-    /// Euler load of a strip of its width, reached at compression `euler_onset / L`
-    /// (`spring_law`).
+    /// Cloth that buckles (`[fabric] compression = "buckling"`, `cpu::compression_law`):
+    /// π²B/Y in m², B the bending rigidity and Y the stretch stiffness; a spring of rest
+    /// length L buckles at compression `euler_onset / L`.
     pub euler_onset: f32,
-    /// The share of its stiffness a spring keeps compressed beyond the Euler load; 0: springs
-    /// are linear in compression (the default).
+    /// (√3/4)·π²B in N·m: a membrane condition of stiffness K (k·A) buckles at strain
+    /// `membrane_onset / K`.
+    pub membrane_onset: f32,
+    /// The share of its stiffness a buckled element keeps; 0: cloth is linear in compression
+    /// (the default).
     pub buckled_fraction: f32,
     /// Padding to the bodies' 16-byte alignment.
     pub _pad0: u32,
-    /// Padding.
-    pub _pad1: u32,
     /// Each collision body's SDF and contact response.
     pub bodies: [BodyParams; MAX_BODIES],
 }

@@ -21,8 +21,8 @@ pub struct Fabric {
     /// The orthotropic membrane that replaces the isotropic edge springs (`model =
     /// "membrane"`); `None`: springs of `stretch_stiffness`.
     pub membrane: Option<Orthotropic>,
-    /// Edge springs buckle in compression (`compression = "buckling"`,
-    /// `cpu::spring_law`) rather than resist it linearly.
+    /// The cloth buckles in compression (`compression = "buckling"`,
+    /// `cpu::compression_law`) rather than resist it linearly.
     pub buckling: bool,
 }
 
@@ -58,16 +58,21 @@ impl Orthotropic {
 pub const BUCKLED_FRACTION: f32 = 0.03;
 
 impl Fabric {
-    /// The springs' law in compression as (`SimParams::euler_onset`,
-    /// `SimParams::buckled_fraction`): with buckling, π²B/Y (B = the hinge coefficient over
-    /// `HINGE_PER_RIGIDITY`, 0 without bending) and `BUCKLED_FRACTION`; (0, 0) when linear.
-    pub fn spring_law(&self) -> (f32, f32) {
+    /// The cloth's law in compression as (`SimParams::euler_onset`,
+    /// `SimParams::membrane_onset`, `SimParams::buckled_fraction`): with buckling, π²B/Y,
+    /// (√3/4)·π²B (B = the hinge coefficient over `HINGE_PER_RIGIDITY`, 0 without bending) and
+    /// `BUCKLED_FRACTION`; zeros when linear (`cpu::compression_law` says why).
+    pub fn compression_law(&self) -> [f32; 3] {
         if !self.buckling {
-            return (0.0, 0.0);
+            return [0.0; 3];
         }
         let rigidity = self.bending_stiffness.unwrap_or(0.0) / HINGE_PER_RIGIDITY as f32;
-        let onset = std::f32::consts::PI.powi(2) * rigidity / self.stretch_stiffness;
-        (onset, BUCKLED_FRACTION)
+        let euler = std::f32::consts::PI.powi(2) * rigidity;
+        [
+            euler / self.stretch_stiffness,
+            3f32.sqrt() / 4.0 * euler,
+            BUCKLED_FRACTION,
+        ]
     }
 
     /// The stiffest stretch the cloth has, in N/m (the springs', or the membrane's stiffer
@@ -192,17 +197,11 @@ pub(super) fn parse(c: &Checker, f: &RawFabric) -> Result<Fabric, InputError> {
     })
 }
 
-/// `compression = "buckling"` (springs carry at most their strip's Euler load in compression)
-/// or `"linear"` (the default).
+/// `compression = "buckling"` (springs and membrane conditions carry at most their strip's
+/// Euler load in compression) or `"linear"` (the default).
 fn parse_compression(c: &Checker, f: &RawFabric) -> Result<bool, InputError> {
     match f.compression.as_deref() {
         None | Some("linear") => Ok(false),
-        Some("buckling") if f.model.as_deref() == Some("membrane") => Err(c.err(
-            "fabric",
-            "compression",
-            "compression = \"buckling\" is built for edge springs; the membrane's compression is linear",
-            "remove compression, or use model = \"springs\"",
-        )),
         Some("buckling") => Ok(true),
         Some(other) => Err(c.err(
             "fabric",

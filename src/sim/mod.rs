@@ -318,8 +318,9 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         tolerance: s.tolerance.unwrap_or(0.0),
         num_bodies: model.colliders.len() as u32,
         smoothing: s.smoothing_sweeps,
-        euler_onset: scene.fabric.spring_law().0,
-        buckled_fraction: scene.fabric.spring_law().1,
+        euler_onset: scene.fabric.compression_law()[0],
+        membrane_onset: scene.fabric.compression_law()[1],
+        buckled_fraction: scene.fabric.compression_law()[2],
         // Friction is soft while a garment is being sewn; the run switches to each body's
         // slip speed once every seam is closed (see `phase_params`).
         bodies: bodies::body_params(&model, &scene.bodies, garment.is_some()),

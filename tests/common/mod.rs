@@ -355,3 +355,18 @@ pub fn buckled_springs(prep: &drapekit::sim::Prepared, positions: &[glam::Vec4])
         })
         .count()
 }
+
+/// How many of the membrane's warp and weft conditions are compressed past their Euler onset
+/// (`SimParams::membrane_onset` over the condition's stiffness) at `positions`.
+pub fn buckled_conditions(prep: &drapekit::sim::Prepared, positions: &[glam::Vec4]) -> usize {
+    let zero = vec![glam::Vec4::ZERO; positions.len()];
+    let onset = prep.params.membrane_onset;
+    (prep.model.membranes.iter())
+        .map(|m| {
+            let step = drapekit::cpu::membrane::MembraneStep::at(m, positions, &zero);
+            (0..2)
+                .filter(|&c| step.stretch(c) < -onset / m.stiffness[c])
+                .count()
+        })
+        .sum()
+}

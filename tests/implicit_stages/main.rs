@@ -107,6 +107,32 @@ fn parity_solve_stages_membrane_tshirt() {
     check_stages("membrane tshirt", g.unwrap(), Case::new(prep, state, step));
 }
 
+/// The T-shirt as a cotton membrane (warp at 30°) whose conditions buckle: perturbed by 5 mm,
+/// many are compressed past their Euler strain, where the force, the Hessian's axial term and
+/// the line search's energy change take the buckled branch.
+#[test]
+fn parity_solve_stages_membrane_buckling_tshirt() {
+    let Some(ctx) = gpu() else { return };
+    let fabric = format!("{}\n{}", common::MEMBRANE_GRAIN_30, common::BUCKLING);
+    let scene = common::scene_with_fabric("scenes/tshirt_drape_cotton.toml", &fabric);
+    let (prep, state, step) = tshirt_with(scene);
+    let buckled = common::buckled_conditions(&prep, &state.positions);
+    let conditions = 2 * prep.model.membranes.len();
+    assert!(
+        buckled * 5 > conditions,
+        "only {buckled} of {conditions} buckled"
+    );
+    let single = SolveOptions {
+        small_rows: u32::MAX,
+    };
+    let g = GpuSolver::with_options(ctx, &prep.model, prep.params, &prep.plan, 1, single);
+    check_stages(
+        "membrane buckling tshirt",
+        g.unwrap(),
+        Case::new(prep, state, step),
+    );
+}
+
 /// The pinched cloth as a cotton membrane (warp at 30°): the membrane's constant stiffness in
 /// the contact stiffness, with contact and friction.
 #[test]

@@ -167,7 +167,7 @@ fn stepping_text(s: &super::Stepping) -> String {
         format!(", every preset's bending rigidity times {f} (B here and `preset_b_n_m` in fabric.csv are the scaled values)")
     });
     let compression = if s.buckling {
-        ", springs that buckle in compression at their strip's Euler load"
+        ", cloth that buckles in compression at its strip's Euler load"
     } else {
         ""
     };
