@@ -161,10 +161,11 @@ fn law_tension(law: CompressionLaw, k: f32, s: f32) -> f32 {
     return k * s;
 }
 
-// d(tension)/ds at stretch s.
+// The axial stiffness the solves take at stretch s: k, and buckled the secant tension/s (cpu:
+// CompressionLaw::axial says why).
 fn law_axial(law: CompressionLaw, k: f32, s: f32) -> f32 {
     if (law_buckled(law, s)) {
-        return law.fraction * k;
+        return law_tension(law, k, s) / s;
     }
     return k;
 }

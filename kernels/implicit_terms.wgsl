@@ -46,7 +46,7 @@ fn plane(b: u32, i: u32) -> vec4<f32> {
 }
 
 // Hessian of a spring's energy in d, made positive semi-definite: axial·n̂n̂ᵀ (axial: the law's
-// d(tension)/ds) plus the transverse term, dropped for a compressed spring.
+// axial stiffness, law_axial) plus the transverse term, dropped for a compressed spring.
 fn spring_hessian(axial: f32, k: f32, rest: f32, d: vec3<f32>, len: f32) -> mat3x3<f32> {
     let n = d / len;
     let nn = outer(n, n);
@@ -454,7 +454,7 @@ fn membrane_stretch(s: vec3<f32>, dw: vec3<f32>) -> f32 {
 }
 
 // Hessian of a stretch condition's energy per unit stiffness in w, made positive semi-definite,
-// with axial the law's d(tension)/ds per unit stiffness (cpu: membrane::stretch_hessian).
+// with axial the law's axial stiffness per unit stiffness (cpu: membrane::stretch_hessian).
 fn membrane_stretch_hessian(axial: f32, n: vec3<f32>, len: f32) -> mat3x3<f32> {
     let nn = outer(n, n);
     return axial * nn + max(1.0 - 1.0 / len, 0.0) * (identity() - nn);

@@ -142,7 +142,7 @@ pub(crate) fn outer(a: Vec3, b: Vec3) -> Mat3 {
 }
 
 /// Hessian of a spring's energy in d, made positive semi-definite: `axial`·n̂n̂ᵀ +
-/// k·max(0, 1 − L/|d|)·(I − n̂n̂ᵀ), with `axial` the law's d(tension)/ds (k when linear). The
+/// k·max(0, 1 − L/|d|)·(I − n̂n̂ᵀ), with `axial` the law's axial stiffness (k when linear). The
 /// transverse term is negative for a compressed spring; it is dropped.
 fn spring_hessian(axial: f32, k: f32, rest: f32, d: Vec3, len: f32) -> Mat3 {
     let n = d / len;

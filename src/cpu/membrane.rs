@@ -90,7 +90,7 @@ pub fn membrane_forces(
 }
 
 /// Hessian of a stretch condition's energy per unit stiffness in w, made positive
-/// semi-definite: `axial`·n̂n̂ᵀ + max(0, 1 − 1/|w|)·(I − n̂n̂ᵀ), `axial` the law's d(tension)/ds
+/// semi-definite: `axial`·n̂n̂ᵀ + max(0, 1 − 1/|w|)·(I − n̂n̂ᵀ), `axial` the law's axial stiffness
 /// per unit stiffness (1 when linear).
 pub fn stretch_hessian(axial: f32, n: Vec3, len: f32) -> Mat3 {
     let nn = super::implicit_terms::outer(n, n);
