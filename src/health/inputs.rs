@@ -101,7 +101,7 @@ pub fn input_warnings(scene: &Scene, bodies: &[Body]) -> Vec<String> {
     out
 }
 
-/// The fabric's values outside `MARGIN` × the measured ranges.
+/// The fabric's values outside `MARGIN` × the measured ranges, and buckling without bending.
 pub fn fabric_warnings(scene: &Scene, fabric: &Fabric) -> Vec<String> {
     let m = fabric.membrane;
     let values = [
@@ -131,6 +131,16 @@ pub fn fabric_warnings(scene: &Scene, fabric: &Fabric) -> Vec<String> {
             range.source
         );
         let e = scene.error("fabric", range.key, problem, fix(&range, v));
+        out.push(one_line(&e));
+    }
+    if fabric.buckling && fabric.bending_stiffness.is_none() {
+        let e = scene.error(
+            "fabric",
+            "compression",
+            "compression = \"buckling\" without bending: with no bending rigidity to hold it \
+             flat, every compressed edge buckles at once and keeps 3% of its stiffness",
+            "give bending_stiffness_n_m (or a preset), or remove compression",
+        );
         out.push(one_line(&e));
     }
     out
@@ -269,6 +279,23 @@ mod tests {
         assert!(fabric_warnings(&s, &s.fabric).is_empty());
         let s = scene("density_kg_m2 = 1.8\nstretch_stiffness_n_m = 10");
         assert_eq!(fabric_warnings(&s, &s.fabric).len(), 2);
+    }
+
+    #[test]
+    fn buckling_without_bending_is_warned() {
+        let plain = "density_kg_m2 = 0.2\nstretch_stiffness_n_m = 500\ncompression = \"buckling\"";
+        let s = scene(plain);
+        let w = fabric_warnings(&s, &s.fabric);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].starts_with(
+                "scene.toml:10: fabric.compression: compression = \"buckling\" without bending"
+            ),
+            "{}",
+            w[0]
+        );
+        let s = scene(&format!("{plain}\nbending_stiffness_n_m = 2e-5"));
+        assert!(fabric_warnings(&s, &s.fabric).is_empty());
     }
 
     #[test]
