@@ -279,6 +279,7 @@ fn parity_membrane_forces() {
 fn parity_membrane_forces_buckling() {
     let mut scene = membrane_sheet(32);
     scene.fabric.buckling = true;
+    scene.solver.frames = 48; // as trajectory_parity_of runs it
     let prep = prepare(&scene).unwrap();
     assert!(prep.params.membrane_onset > 0.0 && prep.params.buckled_fraction > 0.0);
     let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
@@ -498,6 +499,29 @@ fn trajectory_parity_membrane_symplectic() {
     // The 16×16 membrane sheet with its warp at 30°, damped as the spring sheet is (the
     // membrane's τ from the same damping ratio, and air): the same linear bound holds.
     let scene = membrane_sheet(16);
+    trajectory_parity_of(scene, INTEGRATOR_SYMPLECTIC);
+}
+
+#[test]
+fn trajectory_parity_buckling_symplectic() {
+    // The hanging cloth with springs that buckle: the sag between its two pinned corners
+    // compresses springs past their Euler onset, so the law's buckled branch steps the run on
+    // both backends. The damped sheet still hangs towards one equilibrium: the same bound.
+    let mut scene = Scene::load(&fixture("scenes/hanging_cloth.toml")).unwrap();
+    if let drapekit::scene::ClothSource::Grid { columns, rows, .. } = &mut scene.cloth {
+        (*columns, *rows) = (16, 16);
+    }
+    scene.fabric.buckling = true;
+    scene.solver.frames = 48; // as trajectory_parity_of runs it
+    let prep = prepare(&scene).unwrap();
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let mut buckled = 0;
+    simulate(&prep, &mut cpu, &mut RunStats::default(), |_, s| {
+        buckled = buckled.max(common::buckled_springs(&prep, &s.positions));
+        Ok(())
+    })
+    .unwrap();
+    assert!(buckled > 10, "{buckled} springs buckled");
     trajectory_parity_of(scene, INTEGRATOR_SYMPLECTIC);
 }
 
