@@ -279,7 +279,6 @@ fn parity_membrane_forces() {
 fn parity_membrane_forces_buckling() {
     let mut scene = membrane_sheet(32);
     scene.fabric.buckling = true;
-    scene.solver.frames = 48; // as trajectory_parity_of runs it
     let prep = prepare(&scene).unwrap();
     assert!(prep.params.membrane_onset > 0.0 && prep.params.buckled_fraction > 0.0);
     let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
@@ -512,7 +511,7 @@ fn trajectory_parity_buckling_symplectic() {
         (*columns, *rows) = (16, 16);
     }
     scene.fabric.buckling = true;
-    scene.solver.frames = 48; // as trajectory_parity_of runs it
+    scene.solver.frames = 48; // the frames trajectory_parity_of compares, for the count
     let prep = prepare(&scene).unwrap();
     let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
     let mut buckled = 0;

@@ -69,10 +69,11 @@ impl CompressionLaw {
     /// tension/s, which falls from k at the onset towards the buckled fraction of k. Not the
     /// tangent (r·k): a Newton step with a stiffness that jumps 33-fold at the onset
     /// overshoots an element that crosses it, and one Newton step a substep then never settled
-    /// leather's Cusick specimen (a residual of 1,245 times the weight after 480 frames). The
-    /// secant's quadratic lies above the energy (its tension over stretch falls with |s|: the
-    /// iteratively reweighted least-squares bound), so a local step never overshoots, and the
-    /// stiffness is continuous across the onset.
+    /// leather's Cusick specimen (a residual of 1,245 times the weight after 480 frames). On
+    /// the compressed side the secant's quadratic lies above the energy (its tension over
+    /// stretch falls with |s|: the iteratively reweighted least-squares bound), so a local step
+    /// that stays compressed does not overshoot; and the stiffness is continuous across the
+    /// onset.
     pub fn axial(self, k: f32, s: f32) -> f32 {
         if self.buckled(s) {
             self.tension(k, s) / s
@@ -126,7 +127,8 @@ mod tests {
         let (k, rest) = (1000.0, 0.01);
         let law = CompressionLaw::spring(&p, rest);
         let o = 1e-5;
-        // Continuous at the onset, to f32 rounding of k·o (1e-2 N): 1e-8 N.
+        // Continuous at the onset: the two sides, ±1e-6·o apart, differ by k·1e-6·o = 1e-8 N,
+        // plus f32 rounding of k·o (1e-2 N): 1e-9 N.
         let below = law.tension(k, -o * (1.0 + 1e-6));
         let above = law.tension(k, -o * (1.0 - 1e-6));
         assert!((below - above).abs() < 1e-7, "{below} {above}");
@@ -137,10 +139,12 @@ mod tests {
         let secant = law.axial(k, -3.0 * o);
         assert!((secant - k * (1.0 + 0.06) / 3.0).abs() < 1e-3, "{secant}");
         assert!((law.axial(k, -o * (1.0 + 1e-6)) - k).abs() < 1e-2);
-        // Energy change over a small step ≈ tension × step (midpoint), on each branch and
-        // across the onset: the midpoint rule's error is k·ds²-sized, below 1e-3 of it. The
-        // stretches come from lengths, each rounded to half an ulp of the length: across the
-        // onset, where the change is a difference of two energies, |tension|·ulp(len) more.
+        // Energy change over a small step ≈ tension × step (midpoint). On one branch the
+        // tension is linear in s and the midpoint rule exact, up to f32 rounding (1e-3 of it is
+        // far more). Across the onset the stiffness jumps by (1 − r)·k and the rule errs by up
+        // to (1 − r)·k·(ds/2)²/2 (5e-12 J here); the stretches come from lengths rounded to
+        // half an ulp each, and the change is a difference of two energies: |tension|·ulp(len)
+        // more (1.2e-11 J), which covers both.
         for s in [-5.0 * o, -1.01 * o, -0.5 * o, 0.5 * o] {
             let ds = 0.02 * o;
             let (len, len2) = (rest + s, rest + s + ds);

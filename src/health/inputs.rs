@@ -137,8 +137,11 @@ pub fn fabric_warnings(scene: &Scene, fabric: &Fabric) -> Vec<String> {
         let e = scene.error(
             "fabric",
             "compression",
-            "compression = \"buckling\" without bending: with no bending rigidity to hold it \
-             flat, every compressed edge buckles at once and keeps 3% of its stiffness",
+            format!(
+                "compression = \"buckling\" without bending: with no bending rigidity to hold \
+                 it flat, every compressed edge buckles at once and keeps {:.0}% of its stiffness",
+                100.0 * crate::scene::BUCKLED_FRACTION
+            ),
             "give bending_stiffness_n_m (or a preset), or remove compression",
         );
         out.push(one_line(&e));

@@ -53,8 +53,7 @@ impl Orthotropic {
 /// The share of its stiffness a buckled spring keeps (`compression = "buckling"`): a
 /// numerical choice, not a measurement. Zero leaves the sweeps a direction without stiffness
 /// (measured: the solve diverged on the Cusick specimen); 0.1 still locked the drape of a limp
-/// fabric; 0.03 let the drape coefficient fall with bending down to a thirty-second of
-/// cotton's.
+/// fabric; 0.03 let the drape coefficient fall with bending down to a sixteenth of cotton's.
 pub const BUCKLED_FRACTION: f32 = 0.03;
 
 impl Fabric {

@@ -16,7 +16,7 @@ mod world;
 
 pub use body::{BodySettings, BodySource, DeformMotion, DeformSettings, MAX_BODIES};
 pub use cloth::ClothSource;
-pub use fabric::{Fabric, Grain, Orthotropic, HINGE_PER_RIGIDITY};
+pub use fabric::{Fabric, Grain, Orthotropic, BUCKLED_FRACTION, HINGE_PER_RIGIDITY};
 pub use pins::{Corner, GridEdge, PinSelection};
 pub use presets::{preset, FabricPreset, PRESETS};
 pub use preview::{

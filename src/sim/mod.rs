@@ -333,8 +333,12 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         .filter(|(_, pinned)| !**pinned)
         .map(|(m, _)| *m as f64)
         .sum();
-    let energy_complete =
-        model.seams.is_empty() && (model.hinges.is_empty() || !scene.effects().bending);
+    // The monitor counts each spring's energy as ½k·s²: not a membrane's, nor a buckled
+    // spring's (`compression = "buckling"`), which is far less.
+    let energy_complete = model.seams.is_empty()
+        && (model.hinges.is_empty() || !scene.effects().bending)
+        && model.membranes.is_empty()
+        && params.buckled_fraction == 0.0;
     Ok(Prepared {
         model,
         params,
@@ -366,8 +370,9 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
             (scene.gravity_start / frame_dt).ceil() as u32,
         ),
         colors,
-        // The monitor sums kinetic, gravitational and spring energy; hinges and seams store
-        // energy it does not count, so with them only the speed and strain limits guard.
+        // The monitor sums kinetic, gravitational and spring energy; hinges, seams, membranes
+        // and buckled springs store energy it does not count, so with them only the speed and
+        // strain limits guard.
         energy_check_from: (wind.is_none()
             && body_surface_speed == 0.0
             && scene.self_collision.is_none()
