@@ -435,6 +435,7 @@ fn execute(command: Command) -> Result<(), Error> {
                         "operations_per_substep": drapekit::plan::implicit_schedule(shape).len(),
                     })
                 }),
+                "buckling_onset_strain": buckling_onset_strain(&prep),
                 "output_frames": output.frames,
                 "output_bytes_estimate": output.bytes(),
             });
@@ -466,6 +467,14 @@ fn execute(command: Command) -> Result<(), Error> {
                     println!(
                         "  starts from the garment meshed at {d:.3} m, sewn and draped until it \
                          settles (coarse start)"
+                    );
+                }
+                if let Some(strain) = buckling_onset_strain(&prep) {
+                    println!(
+                        "  cloth buckles in compression (compression = \"buckling\"): at {:.3}% \
+                         strain on average, keeping {:.0}% of its stiffness beyond",
+                        100.0 * strain,
+                        100.0 * prep.params.buckled_fraction
                     );
                 }
                 for (k, pass) in prep.plan.passes.iter().enumerate() {
@@ -622,6 +631,23 @@ fn stop_on_ctrl_c() {
 }
 
 /// How implicit Euler solves each substep, in one line for `drapekit plan`.
+/// With `compression = "buckling"`: the mean compressive strain at which the cloth's elements
+/// buckle (the membrane's warp conditions, else the springs: `cpu::compression_law`).
+fn buckling_onset_strain(prep: &drapekit::sim::Prepared) -> Option<f64> {
+    let (p, m) = (&prep.params, &prep.model);
+    if p.buckled_fraction <= 0.0 {
+        return None;
+    }
+    let strains: Vec<f64> = if m.membranes.is_empty() {
+        let onset = |l: f32| (p.euler_onset / (l * l)) as f64;
+        m.springs.iter().map(|s| onset(s.rest_length)).collect()
+    } else {
+        let onset = |k: f32| (p.membrane_onset / k) as f64;
+        m.membranes.iter().map(|t| onset(t.stiffness[0])).collect()
+    };
+    Some(strains.iter().sum::<f64>() / strains.len().max(1) as f64)
+}
+
 fn describe_solve(prep: &drapekit::sim::Prepared) -> String {
     let shape = drapekit::plan::SolveShape::for_run(&prep.model, &prep.params, &prep.plan);
     match &prep.model.multigrid {

@@ -103,6 +103,46 @@ fn plan_json_lists_the_stages() {
 }
 
 #[test]
+fn plan_gives_the_buckling_onset_of_a_scene_that_buckles() {
+    // The hanging cloth (hinge coefficient 2e-5 N·m, so B = 5e-6 N·m; Y = 300 N/m) with
+    // springs that buckle: each spring of rest length L buckles at strain π²B/(Y·L²).
+    let text = std::fs::read_to_string(common::fixture("scenes/hanging_cloth.toml")).unwrap();
+    let dir = common::out_dir("cli", "plan-buckling");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("buckling.toml");
+    let buckling = text.replacen(
+        "\n[fabric]\n",
+        "\n[fabric]\ncompression = \"buckling\"\n",
+        1,
+    );
+    std::fs::write(&scene, &buckling).unwrap();
+    let plan = |path: &Path| -> serde_json::Value {
+        let r = drapekit(&["plan", path.to_str().unwrap(), "--json"]);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        serde_json::from_slice(&r.stdout).unwrap()
+    };
+    let linear = plan(&common::fixture("scenes/hanging_cloth.toml"));
+    assert!(linear["buckling_onset_strain"].is_null());
+    let onset = plan(&scene)["buckling_onset_strain"].as_f64().unwrap();
+    let prep = prepare(&Scene::load(&scene).unwrap()).unwrap();
+    let springs = &prep.model.springs;
+    let mean_inverse_square = springs
+        .iter()
+        .map(|s| 1.0 / (s.rest_length as f64).powi(2))
+        .sum::<f64>()
+        / springs.len() as f64;
+    let expected = std::f64::consts::PI.powi(2) * 5e-6 / 300.0 * mean_inverse_square;
+    // f32 parameters (π²B/Y and each L) against f64 here: a few 1e-7 relative.
+    assert!(
+        (onset / expected - 1.0).abs() < 1e-5,
+        "{onset} against {expected}"
+    );
+    let text = drapekit(&["plan", scene.to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&text.stdout);
+    assert!(out.contains("cloth buckles in compression"), "{out}");
+}
+
+#[test]
 fn a_scene_without_wind_builds_no_wind_pipeline_or_buffer() {
     let Some(ctx) = common::gpu() else { return };
     let hanging =
