@@ -638,12 +638,13 @@ fn buckling_onset_strain(prep: &drapekit::sim::Prepared) -> Option<f64> {
     if p.buckled_fraction <= 0.0 {
         return None;
     }
+    use drapekit::cpu::compression_law::CompressionLaw;
     let strains: Vec<f64> = if m.membranes.is_empty() {
-        let onset = |l: f32| (p.euler_onset / (l * l)) as f64;
-        m.springs.iter().map(|s| onset(s.rest_length)).collect()
+        let strain = |l: f32| (CompressionLaw::spring(p, l).onset / l) as f64;
+        m.springs.iter().map(|s| strain(s.rest_length)).collect()
     } else {
-        let onset = |k: f32| (p.membrane_onset / k) as f64;
-        m.membranes.iter().map(|t| onset(t.stiffness[0])).collect()
+        let strain = |k: f32| CompressionLaw::membrane(p, k).onset as f64;
+        m.membranes.iter().map(|t| strain(t.stiffness[0])).collect()
     };
     Some(strains.iter().sum::<f64>() / strains.len().max(1) as f64)
 }

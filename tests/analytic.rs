@@ -119,6 +119,21 @@ fn chain(n: usize, m: f32, k: f32, l0: f32, damping: f32) -> ClothModel {
     }
 }
 
+/// Steps `solver` through 20 s at substeps of `dt`, a second at a time: under air damping
+/// γ = 2/s the slowest mode decays at least as e^(−γt/2) = e^−20.
+fn run_20_seconds(solver: &mut dyn Solver, dt: f32) {
+    let per_second = (1.0 / dt).round() as u32;
+    for _ in 0..20 {
+        let steps: Vec<SubstepParams> = (0..per_second)
+            .map(|s| SubstepParams {
+                substep: s,
+                ..Default::default()
+            })
+            .collect();
+        solver.advance(&steps).unwrap();
+    }
+}
+
 fn chain_settles(make: impl Fn(&ClothModel, SimParams, &PassPlan) -> Box<dyn Solver>) {
     let (n, m, k, l0) = (10usize, 0.01f32, 10.0f32, 0.05f32);
     let model = chain(n, m, k, l0, 0.05);
@@ -133,16 +148,7 @@ fn chain_settles(make: impl Fn(&ClothModel, SimParams, &PassPlan) -> Box<dyn Sol
         ..Default::default()
     };
     let mut solver = make(&model, params, &plan);
-    // 20 s: the slowest mode decays at least as e^(−γt/2) = e^−20 under air damping γ = 2/s.
-    for _ in 0..20 {
-        let steps: Vec<SubstepParams> = (0..1000)
-            .map(|s| SubstepParams {
-                substep: s,
-                ..Default::default()
-            })
-            .collect();
-        solver.advance(&steps).unwrap();
-    }
+    run_20_seconds(solver.as_mut(), params.dt);
     let state = solver.state().unwrap();
     let y: Vec<f32> = state.positions.iter().map(|p| p.y).collect();
     // Float dead zone: a position update dt·v smaller than ½ulp(y) (y in [1, 2) m: 5.96e-8 m)
@@ -206,17 +212,7 @@ fn column_settles(
         ..Default::default()
     };
     let mut solver = make(&model, params, &plan);
-    // 20 s: the slowest mode decays at least as e^(−γt/2) = e^−20 under air damping γ = 2/s.
-    let per_second = (1.0 / dt).round() as u32;
-    for _ in 0..20 {
-        let steps: Vec<SubstepParams> = (0..per_second)
-            .map(|s| SubstepParams {
-                substep: s,
-                ..Default::default()
-            })
-            .collect();
-        solver.advance(&steps).unwrap();
-    }
+    run_20_seconds(solver.as_mut(), dt);
     let state = solver.state().unwrap();
     let y: Vec<f32> = state.positions.iter().map(|p| p.y).collect();
     // Float dead zone (see `chain_settles`): a step's change smaller than ½ulp(y) = 5.96e-8 m

@@ -287,6 +287,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         }
         None => (0.0, 1),
     };
+    let [euler_onset, membrane_onset, buckled_fraction] = scene.fabric.compression_law();
     let params = SimParams {
         gravity: if scene.gravity_start > 0.0 {
             [0.0; 4]
@@ -318,9 +319,9 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         tolerance: s.tolerance.unwrap_or(0.0),
         num_bodies: model.colliders.len() as u32,
         smoothing: s.smoothing_sweeps,
-        euler_onset: scene.fabric.compression_law()[0],
-        membrane_onset: scene.fabric.compression_law()[1],
-        buckled_fraction: scene.fabric.compression_law()[2],
+        euler_onset,
+        membrane_onset,
+        buckled_fraction,
         // Friction is soft while a garment is being sewn; the run switches to each body's
         // slip speed once every seam is closed (see `phase_params`).
         bodies: bodies::body_params(&model, &scene.bodies, garment.is_some()),
