@@ -10,6 +10,7 @@
 //! - [`effects`]: what each optional effect costs per substep, on both backends;
 //! - [`fabric`]: the fabric presets in the Cusick drape and cantilever bending tests, against
 //!   published values;
+//! - [`profile`]: where a substep's GPU time goes, stage by stage, from GPU timestamps;
 //! - [`peer`]: drapekit beside NVIDIA Warp's cloth benchmark and Newton's cloth solvers, on
 //!   Warp's benchmark cloth ([`warp_cloth`]), through a Python driver ([`python_peer`]).
 
@@ -22,6 +23,7 @@ pub mod grid;
 pub mod integrators;
 pub mod peer;
 mod peer_report;
+pub mod profile;
 pub mod python_peer;
 pub mod warp_cloth;
 

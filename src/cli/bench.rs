@@ -77,6 +77,37 @@ enum BenchCommand {
     /// scene's particle spacing and twice and four times finer; writes convergence.csv,
     /// convergence.md and convergence.svg.
     Convergence(ConvergenceArgs),
+    /// Where the GPU's time goes in a substep, stage by stage (kernel by kernel and level by
+    /// level in the implicit solve), from GPU timestamps: the benchmark cloth at several sizes
+    /// and optionally a scene; writes profile.csv and profile.md.
+    Profile(ProfileArgs),
+}
+
+/// `drapekit bench profile --out DIR`.
+#[derive(Args)]
+#[command(after_help = "Examples:\n  \
+    drapekit bench profile --sizes 256,512,1024 --out out/profile\n  \
+    drapekit bench profile --sizes 64 --scene fixtures/scenes/tshirt_drape_cotton.toml --out out/profile-shirt")]
+struct ProfileArgs {
+    /// Output folder for profile.csv and profile.md.
+    #[arg(long)]
+    out: PathBuf,
+    /// Benchmark-cloth sizes (N: an N×N grid, springs and bending, symplectic Euler); none
+    /// with an empty list.
+    #[arg(long, value_delimiter = ',', default_value = "128,256,512,1024")]
+    sizes: Vec<u32>,
+    /// Substeps profiled per size (and timed without timestamps beside them).
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
+    substeps: u32,
+    /// Also profile this scene on the GPU, with its own integrator and step.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// With --scene: frames run unprofiled, then again profiled.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    frames: u32,
+    /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
+    #[arg(long, default_value = "auto")]
+    adapter: AdapterChoice,
 }
 
 /// `drapekit bench convergence SCENE --out DIR`.
@@ -392,6 +423,19 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
                     cusick: f.tests.is_empty() || f.tests.iter().any(|t| t == "cusick"),
                     cantilever: f.tests.is_empty() || f.tests.iter().any(|t| t == "cantilever"),
                 },
+                command: command_line(),
+            })
+            .map(|_| ())
+        }
+        (Some(BenchCommand::Profile(p)), _) => {
+            let sizes = p.sizes.into_iter().filter(|&n| n > 0).collect();
+            drapekit::bench::profile::run_cli(&drapekit::bench::profile::ProfileOptions {
+                sizes,
+                substeps: p.substeps,
+                scene: p.scene,
+                frames: p.frames,
+                adapter: p.adapter,
+                out: p.out,
                 command: command_line(),
             })
             .map(|_| ())

@@ -5,6 +5,10 @@ use crate::error::Error;
 use crate::solver::AdapterReport;
 use std::str::FromStr;
 
+/// What `Profiler` needs: timestamps written between a pass's dispatches.
+const TIMESTAMP_FEATURES: wgpu::Features =
+    wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
+
 /// Which adapter to run on.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum AdapterChoice {
@@ -161,6 +165,20 @@ impl GpuContext {
 
     /// Opens a device on the chosen adapter with the given array layout (`None`: as `new`).
     pub fn open(choice: &AdapterChoice, layout: Option<ArrayLayout>) -> Result<Self, Error> {
+        Self::open_device(choice, layout, false)
+    }
+
+    /// As `new`, with timestamp queries inside compute passes (what `Profiler` needs); an
+    /// error names the adapter when it has none.
+    pub fn open_with_timestamps(choice: &AdapterChoice) -> Result<Self, Error> {
+        Self::open_device(choice, None, true)
+    }
+
+    fn open_device(
+        choice: &AdapterChoice,
+        layout: Option<ArrayLayout>,
+        timestamps: bool,
+    ) -> Result<Self, Error> {
         let instance = instance();
         let choice = match (choice, std::env::var("WGPU_ADAPTER_NAME")) {
             (AdapterChoice::Auto, Ok(name)) if !name.is_empty() => AdapterChoice::Named(name),
@@ -225,9 +243,20 @@ impl GpuContext {
             max_buffer_size: available.max_buffer_size,
             ..wgpu::Limits::downlevel_defaults()
         };
+        let required_features = match timestamps {
+            false => wgpu::Features::empty(),
+            true => TIMESTAMP_FEATURES,
+        };
+        if !adapter.features().contains(required_features) {
+            return Err(Error::Gpu(format!(
+                "{:?} has no timestamp queries inside compute passes: it cannot be profiled",
+                info.name
+            )));
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("drapekit"),
             required_limits,
+            required_features,
             ..Default::default()
         }))
         .map_err(|e| Error::Gpu(format!("cannot open a device on {:?}: {e}", info.name)))?;
@@ -273,11 +302,44 @@ impl GpuContext {
         }
     }
 
+    /// Maps a MAP_READ slice once the submitted work is done and hands its bytes to `read`.
+    pub(super) fn map_read<T>(
+        &self,
+        slice: wgpu::BufferSlice,
+        read: impl FnOnce(&[u8]) -> T,
+    ) -> Result<T, Error> {
+        self.check()?;
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(format!("waiting for the GPU failed: {e}")))?;
+        // A lost device fails the mapping below; its own message says more.
+        self.check()?;
+        rx.recv()
+            .map_err(|e| Error::Gpu(format!("readback was dropped: {e}")))?
+            .map_err(|e| Error::Gpu(format!("mapping the staging buffer failed: {e}")))?;
+        let out = read(
+            &slice
+                .get_mapped_range()
+                .map_err(|e| Error::Gpu(format!("reading the staging buffer failed: {e}")))?,
+        );
+        slice.buffer().unmap();
+        Ok(out)
+    }
+
     /// The most elements one array may hold: its texture's rows (the device's largest 2D
     /// texture) of `TEXELS_PER_ROW` texels (see texels.rs).
     pub fn max_texels(&self) -> u64 {
         self.device.limits().max_texture_dimension_2d as u64
             * crate::model::layout::TEXELS_PER_ROW as u64
+    }
+
+    /// Whether the device was opened with timestamp queries (`open_with_timestamps`).
+    pub fn has_timestamps(&self) -> bool {
+        self.device.features().contains(TIMESTAMP_FEATURES)
     }
 
     /// A software rasteriser (llvmpipe, lavapipe, WARP): wgpu's `DeviceType::Cpu`.

@@ -7,6 +7,7 @@ mod encode;
 pub mod implicit;
 pub mod kernels;
 mod pipelines;
+pub mod profile;
 mod readback;
 mod solver;
 mod texels;

@@ -48,36 +48,8 @@ impl GpuSolver {
         encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
         self.ctx.queue.submit([encoder.finish()]);
         let slice = staging.slice(..);
-        self.map_read(slice, |bytes| bytemuck::cast_slice(bytes).to_vec())
-    }
-
-    /// Maps a MAP_READ slice once the submitted work is done and hands its bytes to `read`.
-    fn map_read<T>(
-        &self,
-        slice: wgpu::BufferSlice,
-        read: impl FnOnce(&[u8]) -> T,
-    ) -> Result<T, Error> {
-        self.ctx.check()?;
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
         self.ctx
-            .device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::Gpu(format!("waiting for the GPU failed: {e}")))?;
-        // A lost device fails the mapping below; its own message says more.
-        self.ctx.check()?;
-        rx.recv()
-            .map_err(|e| Error::Gpu(format!("readback was dropped: {e}")))?
-            .map_err(|e| Error::Gpu(format!("mapping the staging buffer failed: {e}")))?;
-        let out = read(
-            &slice
-                .get_mapped_range()
-                .map_err(|e| Error::Gpu(format!("reading the staging buffer failed: {e}")))?,
-        );
-        slice.buffer().unmap();
-        Ok(out)
+            .map_read(slice, |bytes| bytemuck::cast_slice(bytes).to_vec())
     }
 
     /// Reads back the forces the last force stage wrote (for per-stage parity tests).
@@ -101,7 +73,7 @@ impl GpuSolver {
         h.copy_to_buffer(&mut encoder, &staging, 0);
         self.ctx.queue.submit([encoder.finish()]);
         // Back from CSR order (texel k holds ref hinge_refs[k]) to ref order, 4·h + role.
-        self.map_read(staging.slice(..), |bytes| {
+        self.ctx.map_read(staging.slice(..), |bytes| {
             let texels: &[Vec4] = bytemuck::cast_slice(bytes);
             let mut forces = vec![Vec4::ZERO; self.hinge_refs.len()];
             for (k, &r) in self.hinge_refs.iter().enumerate() {
@@ -119,7 +91,7 @@ impl GpuSolver {
             at += a.padded_bytes();
         }
         self.ctx.queue.submit([encoder.finish()]);
-        self.map_read(self.staging.slice(..at), |bytes| {
+        self.ctx.map_read(self.staging.slice(..at), |bytes| {
             let all: &[Vec4] = bytemuck::cast_slice(bytes);
             let mut start = 0;
             arrays

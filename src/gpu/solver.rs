@@ -11,6 +11,7 @@ use super::elements::{element_arrays, stage_elements};
 use super::implicit::{ImplicitSolve, Shared, SolveOptions};
 use super::kernels::{compose_with, ForceInput, VbdEnergies};
 use super::pipelines::{build_stage, Binding, Stage};
+use super::profile::Profiler;
 use super::texels::TexelArray;
 use crate::error::Error;
 use crate::model::layout::{SimParams, SubstepParams, WORKGROUP_SIZE};
@@ -66,6 +67,8 @@ pub struct GpuSolver {
     pub(super) passes: Vec<Pass>,
     /// The `monitor` stage's per-workgroup partials (two `vec4<u32>` each).
     pub(super) health: wgpu::Buffer,
+    /// GPU timestamps per stage, once `start_profile` was called.
+    pub(super) profile: Option<Profiler>,
 }
 
 impl GpuSolver {
@@ -511,7 +514,20 @@ impl GpuSolver {
             implicit,
             passes: plan.passes.clone(),
             health,
+            profile: None,
         })
+    }
+
+    /// From now on, times every stage (and every dispatch of the implicit solve) on the GPU,
+    /// one substep per submission; the context must have been opened with timestamps.
+    pub fn start_profile(&mut self) -> Result<(), Error> {
+        self.profile = Some(Profiler::new(&self.ctx)?);
+        Ok(())
+    }
+
+    /// What `start_profile` measured so far.
+    pub fn profile(&self) -> Option<&Profiler> {
+        self.profile.as_ref()
     }
 
     /// The stages that have pipelines, in order (`monitor` last).
@@ -550,7 +566,8 @@ impl Solver for GpuSolver {
     }
 
     fn advance(&mut self, steps: &[SubstepParams]) -> Result<(), Error> {
-        let passes = self.pipeline_passes();
+        // The plan's stages only: `monitor` runs once per frame, in `health`, as on the CPU.
+        let passes = self.passes.clone();
         self.run_passes(&passes, steps)
     }
 

@@ -165,7 +165,7 @@ impl GpuSolver {
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         {
             let mut cpass = encoder.begin_compute_pass(&Default::default());
-            solve.encode_dispatches(&mut cpass, &dispatches, parity, 0);
+            solve.encode_dispatches(&mut cpass, &dispatches, parity, 0, None);
         }
         ctx.queue.submit([encoder.finish()]);
         Ok(())

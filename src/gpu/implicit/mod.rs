@@ -18,6 +18,7 @@ pub use kernels::{Include, Res, SolveKernel};
 
 use super::context::GpuContext;
 use super::kernels::VbdEnergies;
+use super::profile::Profiler;
 use super::texels::TexelArray;
 use crate::error::Error;
 use crate::model::layout::SimParams;
@@ -218,12 +219,14 @@ impl ImplicitSolve {
         parity: usize,
         substep_offset: u32,
         measured: bool,
+        profile: Option<&mut Profiler>,
     ) {
         let end = match measured {
             true => self.dispatches.len(),
             false => self.dispatches.len() - self.final_residual,
         };
-        self.encode_dispatches(cpass, &self.dispatches[..end], parity, substep_offset);
+        let dispatches = &self.dispatches[..end];
+        self.encode_dispatches(cpass, dispatches, parity, substep_offset, profile);
     }
 
     fn encode_dispatches(
@@ -232,6 +235,7 @@ impl ImplicitSolve {
         dispatches: &[Dispatch],
         parity: usize,
         substep_offset: u32,
+        mut profile: Option<&mut Profiler>,
     ) {
         for d in dispatches {
             let k = &self.pipelines[&d.kernel];
@@ -239,6 +243,25 @@ impl ImplicitSolve {
             let op_offset = (d.op as u64 * self.op_stride) as u32;
             cpass.set_bind_group(0, &k.groups[parity], &[substep_offset, op_offset]);
             cpass.dispatch_workgroups(d.groups.0, d.groups.1, 1);
+            if let Some(p) = profile.as_deref_mut() {
+                p.mark(cpass, 1, || self.profile_label(d));
+            }
+        }
+    }
+
+    /// A dispatch's profile label: the kernel, and its level where a level has its own.
+    fn profile_label(&self, d: &Dispatch) -> String {
+        use SolveKernel as K;
+        let level = self.tables.params[d.op as usize].level;
+        let name = match d.kernel {
+            K::PcgDot => "pcg_dot",
+            k => k.file(),
+        };
+        match d.kernel {
+            K::Smooth | K::LevelResidual | K::Restrict | K::Prolong | K::CoarseOperator => {
+                format!("solve/{name} L{level}")
+            }
+            _ => format!("solve/{name}"),
         }
     }
 
@@ -263,7 +286,7 @@ impl ImplicitSolve {
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         {
             let mut cpass = encoder.begin_compute_pass(&Default::default());
-            self.encode_dispatches(&mut cpass, &dispatches, 0, 0);
+            self.encode_dispatches(&mut cpass, &dispatches, 0, 0, None);
         }
         ctx.queue.submit([encoder.finish()]);
         Ok(())
