@@ -55,6 +55,8 @@ if [ "$quick" = 1 ]; then
     scaling_frames=2
     shirt_frames=(--frames 2)
     bench_args=(--substeps 5 --repeats 1)
+    profile_args=(--substeps 2)
+    profile_frames=1
     long=120
 else
     sizes=128,256,512,1024
@@ -65,6 +67,8 @@ else
     scaling_frames=10
     shirt_frames=()
     bench_args=()
+    profile_args=()
+    profile_frames=5
     long=300
     # The 5 mm shirt's coarse start must settle before its frames count, so it runs whole
     # (about a minute on a recent GPU) and is stopped like Ctrl-C after this many seconds.
@@ -153,6 +157,10 @@ for layout in textures buffers; do
     step "bench_layout_$layout" "$long" env DRAPEKIT_GPU_LAYOUT="$layout" \
         "$bin" bench --sizes "$sizes" "${bench_args[@]}" --out "$out/bench_layout_$layout"
 done
+
+# Where the GPU's time goes: each stage at each size, and the cotton T-shirt's implicit solve.
+step profile "$long" "$bin" bench profile --sizes "$sizes" "${profile_args[@]}" --scene "$cotton" \
+    --frames "$profile_frames" --out "$out/profile"
 
 # drapekit on Warp's benchmark cloth, both integrators (the implicit one at the smaller sizes).
 step peer "$long" "$bin" bench peer --systems drapekit --sizes "$peer_sizes" \

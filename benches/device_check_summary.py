@@ -163,6 +163,22 @@ def threads(out, by_name):
     return lines
 
 
+def profile(out, by_name):
+    """Each case's GPU and wall time per substep and its costliest stage; profile.md has all."""
+    rs = rows(os.path.join(out, "profile", "profile.csv"))
+    if not rs:
+        return [f"No profile ({by_name.get('profile', {}).get('status', 'not run')})."]
+    cases = {}
+    for r in rs:
+        c = cases.setdefault(r["case"], r)
+        if float(r["share"]) > float(c["share"]):
+            cases[r["case"]] = r
+    body = [[c, r["particles"], r["gpu_us_per_substep"], r["wall_us_per_substep"],
+             f"{r['stage']} ({float(r['share']):.0f}%)"] for c, r in cases.items()]
+    lines = table(["case", "particles", "GPU µs/substep", "wall µs/substep", "costliest stage"], body)
+    return lines + ["", "Every stage: profile/profile.md.", "", f"- `{by_name['profile']['command']}`"]
+
+
 def main():
     out, quick = sys.argv[1], sys.argv[2] == "1"
     all_steps = steps(out)
@@ -175,6 +191,7 @@ def main():
                    [[s["step"], s["status"], s["seconds"], f"`{s['command']}`"] for s in all_steps])
     lines += ["", "## Garments", ""] + shirts(out, by_name)
     lines += ["", "## Substeps by grid size and GPU memory layout", ""] + bench(out, by_name)
+    lines += ["", "## Where the GPU's time goes (`bench profile`)", ""] + profile(out, by_name)
     lines += ["", "## drapekit on Warp's benchmark cloth (`bench peer`)", ""] + peer(out, "peer", by_name)
     lines += ["", "## CPU thread scaling of implicit Euler", ""] + threads(out, by_name)
     if os.path.exists(os.path.join(out, "peers", "peer.csv")) or "peers" in by_name:

@@ -1,5 +1,5 @@
 // A run of the V-cycle's operations on small levels in one workgroup: the op list entries
-// op.first .. op.first + op.count (src/gpu/solve_dispatch.rs builds them), each a smooth
+// op.first .. op.first + op.count (src/gpu/implicit/dispatch.rs builds them), each a smooth
 // (every colour of the level, forward or backward), a residual, a restriction or a
 // prolongation, the workgroup striding over the rows and meeting at a barrier after each colour
 // and each operation. Rows of one colour are independent, so this gives the numbers of one
@@ -10,7 +10,7 @@
 // level), and 1 for a backward smooth.
 @group(0) @binding(30) var<storage, read> op_list: array<vec4<u32>>;
 
-// Keep in sync with src/gpu/solve_dispatch.rs.
+// Keep in sync with src/gpu/implicit/dispatch.rs.
 const CYCLE_SMOOTH: u32 = 0u;
 const CYCLE_RESIDUAL: u32 = 1u;
 const CYCLE_RESTRICT: u32 = 2u;

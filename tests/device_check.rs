@@ -53,6 +53,7 @@ fn device_check_quick_writes_its_folder_and_summary() {
         "bench",
         "bench_layout_textures",
         "bench_layout_buffers",
+        "profile",
         "peer",
         "threads_1",
     ] {

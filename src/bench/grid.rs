@@ -83,14 +83,29 @@ pub struct BenchRow {
     pub particle_substeps_per_second: f64,
 }
 
+/// Untimed work before a size is timed: a GPU left idle while the CPU twin ran (seconds at the
+/// larger sizes) lowers its clocks and raises them again only under sustained load.
+pub const WARM_UP_SECONDS: f64 = 0.5;
+
+/// Untimed batches of `steps` for `WARM_UP_SECONDS` (at least one): caches, pipeline state
+/// and the clocks warm.
+pub fn warm_up(solver: &mut dyn Solver, steps: &[SubstepParams]) -> Result<(), Error> {
+    let start = Instant::now();
+    loop {
+        solver.advance(steps)?;
+        solver.finish()?;
+        if start.elapsed().as_secs_f64() >= WARM_UP_SECONDS {
+            return Ok(());
+        }
+    }
+}
+
 fn median_batch(
     solver: &mut dyn Solver,
     steps: &[SubstepParams],
     repeats: u32,
 ) -> Result<f64, Error> {
-    // One untimed batch warms caches and (on the GPU) pipeline state.
-    solver.advance(steps)?;
-    solver.finish()?;
+    warm_up(solver, steps)?;
     let mut times = Vec::new();
     for _ in 0..repeats.max(1) {
         let start = Instant::now();
@@ -159,7 +174,8 @@ pub fn run_cli(
     let mut csv = String::from("size,particles,backend,device,substeps_per_batch,median_seconds,particle_substeps_per_second\n");
     let mut md = format!(
         "Whole substep (CPU: {}; GPU: {}), {substeps} substeps per batch \
-         (one submission on the GPU), median of {repeats} batches.\n\n\
+         (one submission on the GPU), median of {repeats} batches after {WARM_UP_SECONDS} s of \
+         untimed ones.\n\n\
          | grid | particles | backend | particle-substeps/s | s per batch | device |\n|---|---|---|---|---|---|\n",
         stages(CpuSolver::HINGES),
         stages(GpuSolver::HINGES),

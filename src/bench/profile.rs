@@ -79,9 +79,7 @@ fn grid_case(ctx: &GpuContext, n: u32, substeps: u32) -> Result<ProfileCase, Err
     let (model, params, plan) = super::bench_model(n.max(2));
     let steps = super::bench_steps(substeps.max(1), params.dt);
     let mut gpu = GpuSolver::new(ctx, &model, params, &plan, steps.len())?;
-    // One untimed batch warms pipelines and caches.
-    gpu.advance(&steps)?;
-    gpu.finish()?;
+    super::grid::warm_up(&mut gpu, &steps)?;
     let start = Instant::now();
     gpu.advance(&steps)?;
     gpu.finish()?;

@@ -92,8 +92,8 @@ struct ProfileArgs {
     /// Output folder for profile.csv and profile.md.
     #[arg(long)]
     out: PathBuf,
-    /// Benchmark-cloth sizes (N: an N×N grid, springs and bending, symplectic Euler); none
-    /// with an empty list.
+    /// Benchmark-cloth sizes (N: an N×N grid, springs and bending, symplectic Euler; 0: none,
+    /// for a scene alone).
     #[arg(long, value_delimiter = ',', default_value = "128,256,512,1024")]
     sizes: Vec<u32>,
     /// Substeps profiled per size (and timed without timestamps beside them).
