@@ -130,6 +130,13 @@ fn bench_profile_writes_each_stage_of_the_grid_and_the_scene() {
         stages_of("hanging_cloth.toml").contains(&"integrate"),
         "{csv}"
     );
+    // The frame's substeps were profiled; its health check is timed but is no substep.
+    let frame = prepare(&Scene::load(&scene).unwrap()).unwrap().substeps;
+    let integrate = (rows.iter())
+        .find(|r| r[0] == "\"hanging_cloth.toml\"" && r[5] == "\"integrate\"")
+        .unwrap();
+    assert_eq!(integrate[2], frame.to_string(), "{csv}");
+    assert_eq!(integrate[6], "1.00", "{csv}");
     // Shares of a case add up to 100% (each printed to 0.01).
     let share: f64 = (rows.iter().filter(|r| r[0] == "\"grid 8²\""))
         .map(|r| r[8].parse::<f64>().unwrap())

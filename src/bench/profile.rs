@@ -173,7 +173,8 @@ fn write_report(o: &ProfileOptions, ctx: &GpuContext, cases: &[ProfileCase]) -> 
     );
     let mut md = format!(
         "`{}`\n\nGPU time per substep from timestamps after every stage (one substep a \
-         submission), and wall time per substep without them; device: {device}.\n",
+         submission; a scene's once-a-frame health check, `monitor`, spread over the frame's \
+         substeps), and wall time per substep without them; device: {device}.\n",
         o.command
     );
     for c in cases {

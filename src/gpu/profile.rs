@@ -36,7 +36,7 @@ pub struct Profiler {
     pending: Vec<(String, u32)>,
     /// Sums per label, in first-seen order.
     totals: Vec<StageTime>,
-    /// Substeps whose intervals were summed.
+    /// Substeps `advance` ran while profiling.
     substeps: u64,
     /// Marks dropped because a substep had more dispatch groups than `QUERIES`.
     dropped: u64,
@@ -131,8 +131,12 @@ impl Profiler {
                 }),
             }
         }
-        self.substeps += 1;
         Ok(())
+    }
+
+    /// Counts `n` substeps run (`advance`; a frame's health check is timed but is none).
+    pub fn add_substeps(&mut self, n: usize) {
+        self.substeps += n as u64;
     }
 
     /// The sums per label, in the order the stages first ran.

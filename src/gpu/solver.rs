@@ -568,6 +568,9 @@ impl Solver for GpuSolver {
     fn advance(&mut self, steps: &[SubstepParams]) -> Result<(), Error> {
         // The plan's stages only: `monitor` runs once per frame, in `health`, as on the CPU.
         let passes = self.passes.clone();
+        if let Some(p) = self.profile.as_mut() {
+            p.add_substeps(steps.len());
+        }
         self.run_passes(&passes, steps)
     }
 
