@@ -112,7 +112,7 @@ fn target_line(rows: &[PeerRow]) -> String {
         "**not met**"
     };
     format!(
-        "Target (issue 14): drapekit's CPU path at least 2× Warp-CPU at 128² and 256², in one \
+        "Target: drapekit's CPU path at least 2× Warp-CPU at 128² and 256², in one \
          run: {verdict} ({}).\n",
         shown.join(", ")
     )
