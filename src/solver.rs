@@ -68,6 +68,10 @@ pub trait Solver {
     fn advance(&mut self, steps: &[SubstepParams]) -> Result<(), Error>;
     /// Reads positions and velocities back.
     fn state(&mut self) -> Result<ParticleState, Error>;
+    /// Reads the positions back (w = inverse mass), without the velocities.
+    fn positions(&mut self) -> Result<Vec<glam::Vec4>, Error> {
+        Ok(self.state()?.positions)
+    }
     /// Replaces positions (w = inverse mass) and velocities, e.g. to release attachments.
     fn set_state(&mut self, state: &ParticleState);
     /// Replaces the run-constant parameters between frames (e.g. to switch gravity on).

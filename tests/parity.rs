@@ -580,3 +580,25 @@ fn parity_monitor() {
         c.kinetic_energy
     );
 }
+
+/// `positions` reads the positions alone (what `bench peer` reads each frame, as Warp's
+/// benchmark does): the same values as the whole state's, after a few substeps.
+#[test]
+fn positions_alone_equal_the_states() {
+    let Some(ctx) = gpu() else { return };
+    let prep = flag();
+    let mut g = GpuSolver::new(
+        ctx,
+        &prep.model,
+        prep.params,
+        &prep.plan,
+        prep.substeps as usize,
+    )
+    .unwrap();
+    let start = g.positions().unwrap();
+    g.advance(&substep_params(&prep, 1)).unwrap();
+    let positions = g.positions().unwrap();
+    let state = g.state().unwrap();
+    assert_eq!(positions, state.positions);
+    assert_ne!(positions, start, "the frame moved the flag");
+}

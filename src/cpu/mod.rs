@@ -554,6 +554,10 @@ impl Solver for CpuSolver {
         self.force.fill(Vec4::ZERO);
     }
 
+    fn positions(&mut self) -> Result<Vec<Vec4>, Error> {
+        Ok(self.pos.clone())
+    }
+
     fn state(&mut self) -> Result<ParticleState, Error> {
         Ok(ParticleState {
             positions: self.pos.clone(),

@@ -640,6 +640,10 @@ impl Solver for GpuSolver {
         }
     }
 
+    fn positions(&mut self) -> Result<Vec<Vec4>, Error> {
+        Ok(self.read_back(&[&self.pos[self.current]])?.remove(0))
+    }
+
     fn state(&mut self) -> Result<ParticleState, Error> {
         let (p, v) = (&self.pos[self.current], &self.vel[self.current]);
         let mut out = self.read_back(&[p, v])?;
