@@ -148,17 +148,10 @@ fn time_frames(
     frames: u32,
     substeps: u32,
 ) -> Result<(f64, Vec<Vec3>), Error> {
-    let dt = warp_cloth::substep_dt(substeps);
     let mut times = Vec::with_capacity(frames as usize);
     let mut last = Vec::new();
     for f in 0..frames {
-        let steps: Vec<SubstepParams> = (0..substeps)
-            .map(|s| SubstepParams {
-                time: (f * substeps + s) as f32 * dt,
-                substep: s,
-                ..Default::default()
-            })
-            .collect();
+        let steps = frame_steps(f, substeps);
         let start = Instant::now();
         solver.advance(&steps)?;
         // The positions alone, as Warp's benchmark reads them back.
@@ -167,6 +160,18 @@ fn time_frames(
         last = positions.iter().map(|p| p.truncate()).collect();
     }
     Ok((median(times), last))
+}
+
+/// Frame `f`'s substeps (from 0) of Warp's benchmark step.
+fn frame_steps(f: u32, substeps: u32) -> Vec<SubstepParams> {
+    let dt = warp_cloth::substep_dt(substeps);
+    (0..substeps)
+        .map(|s| SubstepParams {
+            time: (f * substeps + s) as f32 * dt,
+            substep: s,
+            ..Default::default()
+        })
+        .collect()
 }
 
 /// Reads a peer's final positions (little-endian f32 xyz).
@@ -332,6 +337,11 @@ fn drapekit_rows(
     }
     let mut rows = Vec::new();
     for (backend, device, mut solver) in backends {
+        // Warm caches and clocks (an idle GPU runs at a fraction of its clock), then start
+        // again from rest.
+        let rest = solver.state()?;
+        super::grid::warm_up(solver.as_mut(), &frame_steps(0, substeps))?;
+        solver.set_state(&rest);
         let (median, state) = time_frames(solver.as_mut(), frames, substeps)?;
         rows.push(PeerRow {
             system: "drapekit".into(),

@@ -162,7 +162,8 @@ fn markdown(opts: &PeerOptions, report: &PeerReport) -> String {
         md,
         "- Each point: {} frames of 1/60 s from rest, each frame timed (its substeps plus \
          reading the positions back, as Warp's benchmark returns them); the median frame is \
-         reported. Kernel compilation is excluded. The cloth is Warp's benchmark cloth \
+         reported; before them, untimed frames for half a second warm caches and clocks, and \
+         the cloth starts again from rest. Kernel compilation is excluded. The cloth is Warp's benchmark cloth \
          (`bench::warp_cloth`): springs only, k = 1000 N/m, damping 10 N·s/m, 0.1 kg \
          particles 0.1 m apart, two corners pinned.\n",
         opts.frames

@@ -428,7 +428,15 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
             .map(|_| ())
         }
         (Some(BenchCommand::Profile(p)), _) => {
-            let sizes = p.sizes.into_iter().filter(|&n| n > 0).collect();
+            let sizes: Vec<u32> = p.sizes.into_iter().filter(|&n| n > 0).collect();
+            if sizes.is_empty() && p.scene.is_none() {
+                return Err(Error::Input(drapekit::error::InputError::new(
+                    std::path::Path::new("drapekit bench profile"),
+                    "--sizes",
+                    "no grid size and no --scene: nothing to profile".to_string(),
+                    "give grid sizes (e.g. --sizes 128,256) or a scene with --scene",
+                )));
+            }
             drapekit::bench::profile::run_cli(&drapekit::bench::profile::ProfileOptions {
                 sizes,
                 substeps: p.substeps,

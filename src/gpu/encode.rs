@@ -14,7 +14,7 @@ impl GpuSolver {
         self.ctx.check()?;
         let mut capacity = self.substeps.as_ref().map_or(usize::MAX, |s| s.capacity);
         if self.profile.is_some() {
-            // The timestamps of one substep fill a query set.
+            // One query set is resolved and read back per submission: one substep each.
             capacity = 1;
         }
         let batches = steps.chunks(capacity.min(steps.len().max(1)));

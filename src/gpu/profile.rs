@@ -38,7 +38,7 @@ pub struct Profiler {
     totals: Vec<StageTime>,
     /// Substeps `advance` ran while profiling.
     substeps: u64,
-    /// Marks dropped because a substep had more dispatch groups than `QUERIES`.
+    /// Marks dropped because a substep had more than `QUERIES - 1` dispatch groups.
     dropped: u64,
 }
 
@@ -149,7 +149,7 @@ impl Profiler {
         self.substeps
     }
 
-    /// Dispatch groups left untimed (a substep with more than wgpu's most queries per set).
+    /// Dispatch groups left untimed (past the `QUERIES - 1` marks a substep can hold).
     pub fn dropped(&self) -> u64 {
         self.dropped
     }

@@ -530,7 +530,13 @@ impl GpuSolver {
         self.profile.as_ref()
     }
 
-    /// The stages that have pipelines, in order (`monitor` last).
+    /// The plan's stages in order: what `advance` runs each substep.
+    pub fn passes(&self) -> &[Pass] {
+        &self.passes
+    }
+
+    /// The stages that have pipelines, in order (`monitor` last, which `advance` leaves to
+    /// `health`).
     pub fn pipeline_passes(&self) -> Vec<Pass> {
         let mut passes = self.passes.clone();
         passes.push(Pass::Monitor);

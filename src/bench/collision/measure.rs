@@ -238,7 +238,7 @@ impl Backend {
                 }
                 Ok(())
             }
-            Backend::Gpu(s) => s.run_passes(&without(&s.pipeline_passes()), steps),
+            Backend::Gpu(s) => s.run_passes(&without(s.passes()), steps),
         }
     }
 }
