@@ -100,7 +100,8 @@ pub fn warm_up(solver: &mut dyn Solver, steps: &[SubstepParams]) -> Result<(), E
     }
 }
 
-fn median_batch(
+/// Seconds of the median of `repeats` batches of `steps`, after `warm_up`.
+pub(super) fn median_batch(
     solver: &mut dyn Solver,
     steps: &[SubstepParams],
     repeats: u32,

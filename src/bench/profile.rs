@@ -12,7 +12,6 @@ use crate::sim::{prepare, simulate, RunStats};
 use crate::solver::Solver;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 /// What `bench profile` runs.
 pub struct ProfileOptions {
@@ -49,9 +48,14 @@ pub struct ProfileCase {
 }
 
 impl ProfileCase {
+    /// GPU seconds, all labels and substeps together.
+    pub fn gpu_seconds(&self) -> f64 {
+        self.stages.iter().map(|s| s.seconds).sum()
+    }
+
     /// GPU seconds per substep, all labels together.
     pub fn gpu_per_substep(&self) -> f64 {
-        self.stages.iter().map(|s| s.seconds).sum::<f64>() / self.substeps.max(1) as f64
+        self.gpu_seconds() / self.substeps.max(1) as f64
     }
 }
 
@@ -80,17 +84,7 @@ fn grid_case(ctx: &GpuContext, n: u32, substeps: u32) -> Result<ProfileCase, Err
     let (model, params, plan) = super::bench_model(n);
     let steps = super::bench_steps(substeps.max(1), params.dt);
     let mut gpu = GpuSolver::new(ctx, &model, params, &plan, steps.len())?;
-    super::grid::warm_up(&mut gpu, &steps)?;
-    // The median of three batches.
-    let mut walls: Vec<f64> = Vec::new();
-    for _ in 0..3 {
-        let start = Instant::now();
-        gpu.advance(&steps)?;
-        gpu.finish()?;
-        walls.push(start.elapsed().as_secs_f64() / steps.len() as f64);
-    }
-    walls.sort_by(f64::total_cmp);
-    let wall_per_substep = walls[1];
+    let wall_per_substep = super::grid::median_batch(&mut gpu, &steps, 3)? / steps.len() as f64;
     gpu.start_profile()?;
     gpu.advance(&steps)?;
     gpu.finish()?;
@@ -161,8 +155,7 @@ fn print_case(c: &ProfileCase) {
 
 /// A stage's percentage of its case's GPU time.
 fn share(s: &StageTime, c: &ProfileCase) -> f64 {
-    let total: f64 = c.stages.iter().map(|t| t.seconds).sum();
-    100.0 * s.seconds / total.max(f64::MIN_POSITIVE)
+    100.0 * s.seconds / c.gpu_seconds().max(f64::MIN_POSITIVE)
 }
 
 fn write_report(o: &ProfileOptions, ctx: &GpuContext, cases: &[ProfileCase]) -> Result<(), Error> {
