@@ -57,12 +57,14 @@ pub const PLANE_BLOCKS: usize = 2;
 pub struct VbdElements<'a> {
     /// Spring offsets per particle and incident springs.
     pub springs: (&'a [u32], &'a [SpringRef]),
-    /// Hinge offsets, hinge refs (index · 4 + role) and hinges, when bending is on.
+    /// Hinge offsets, hinge refs (index · 4 + role) and each ref's hinge (at the ref's
+    /// position, so that a vertex's hinges lie side by side), when bending is on.
     pub hinges: Option<(&'a [u32], &'a [u32], &'a [Hinge])>,
-    /// Seam offsets, seam refs (index · 4 + role) and seam pairs, when the cloth is sewn.
+    /// Seam offsets, seam refs (index · 4 + role) and each ref's seam pair (at the ref's
+    /// position), when the cloth is sewn.
     pub seams: Option<(&'a [u32], &'a [u32], &'a [Seam])>,
-    /// Membrane offsets, refs (triangle · 4 + role) and triangles, when the fabric is a
-    /// membrane.
+    /// Membrane offsets, refs (triangle · 4 + role) and each ref's triangle (at the ref's
+    /// position), when the fabric is a membrane.
     pub membranes: Option<(&'a [u32], &'a [u32], &'a [Membrane])>,
 }
 
@@ -78,23 +80,19 @@ impl VbdElements<'_> {
             springs[incident(offsets, i)]
                 .iter()
                 .for_each(|s| meets(s.other));
-            if let Some((offsets, refs, hinges)) = self.hinges {
-                for &r in &refs[incident(offsets, i)] {
-                    hinges[(r / 4) as usize].v.iter().for_each(|&j| meets(j));
+            if let Some((offsets, _, hinges)) = self.hinges {
+                for hinge in &hinges[incident(offsets, i)] {
+                    hinge.v.iter().for_each(|&j| meets(j));
                 }
             }
-            if let Some((offsets, refs, seams)) = self.seams {
-                for &r in &refs[incident(offsets, i)] {
-                    seams[(r / 4) as usize].v[..3]
-                        .iter()
-                        .for_each(|&j| meets(j));
+            if let Some((offsets, _, seams)) = self.seams {
+                for s in &seams[incident(offsets, i)] {
+                    s.v[..3].iter().for_each(|&j| meets(j));
                 }
             }
-            if let Some((offsets, refs, membranes)) = self.membranes {
-                for &r in &refs[incident(offsets, i)] {
-                    membranes[(r / 4) as usize].v[..3]
-                        .iter()
-                        .for_each(|&j| meets(j));
+            if let Some((offsets, _, membranes)) = self.membranes {
+                for m in &membranes[incident(offsets, i)] {
+                    m.v[..3].iter().for_each(|&j| meets(j));
                 }
             }
         }
@@ -232,15 +230,15 @@ impl Implicit<'_> {
             sum += (s.stiffness + s.damping / h) / 3.0;
         }
         if let Some((offsets, refs, seams)) = self.el.seams {
-            for &r in &refs[offsets[i] as usize..offsets[i + 1] as usize] {
-                let s = &seams[(r / 4) as usize];
+            let range = offsets[i] as usize..offsets[i + 1] as usize;
+            for (&r, s) in refs[range.clone()].iter().zip(&seams[range]) {
                 let share = seam_share(s, r % 4);
                 sum += share * share * (s.stiffness + s.damping / h);
             }
         }
         if let Some((offsets, refs, membranes)) = self.el.membranes {
-            for &r in &refs[offsets[i] as usize..offsets[i + 1] as usize] {
-                let m = &membranes[(r / 4) as usize];
+            let range = offsets[i] as usize..offsets[i + 1] as usize;
+            for (&r, m) in refs[range.clone()].iter().zip(&membranes[range]) {
                 sum += MembraneStep::constant_stiffness(m, (r % 4) as usize, h);
             }
         }
@@ -313,7 +311,7 @@ impl Implicit<'_> {
         if let Some((offsets, refs, hinges)) = self.el.hinges {
             for k in offsets[i]..offsets[i + 1] {
                 let r = refs[k as usize];
-                let hinge = &hinges[(r / 4) as usize];
+                let hinge = &hinges[k as usize];
                 let Some(t) = self.hinge_frame(hinge, d) else {
                     continue;
                 };
@@ -337,7 +335,7 @@ impl Implicit<'_> {
         if let Some((offsets, refs, membranes)) = self.el.membranes {
             for k in offsets[i]..offsets[i + 1] {
                 let r = refs[k as usize];
-                let m = &membranes[(r / 4) as usize];
+                let m = &membranes[k as usize];
                 let role = (r % 4) as usize;
                 let (fm, mb) = MembraneStep::at(m, self.prev, d).system(p, m, role, h);
                 f += fm;
@@ -355,7 +353,7 @@ impl Implicit<'_> {
         if let Some((offsets, refs, seams)) = self.el.seams {
             for k in offsets[i]..offsets[i + 1] {
                 let r = refs[k as usize];
-                let s = &seams[(r / 4) as usize];
+                let s = &seams[k as usize];
                 let (fa, ha) = self.seam_system(s, d);
                 let share = seam_share(s, r % 4);
                 f += share * fa;
@@ -459,11 +457,11 @@ impl Implicit<'_> {
         }
 
         if let Some((offsets, refs, hinges)) = self.el.hinges {
-            for &r in &refs[offsets[i] as usize..offsets[i + 1] as usize] {
+            let range = offsets[i] as usize..offsets[i + 1] as usize;
+            for (&r, hinge) in refs[range.clone()].iter().zip(&hinges[range]) {
                 if r % 4 != 0 {
                     continue;
                 }
-                let hinge = &hinges[(r / 4) as usize];
                 let before = self.hinge_energy(hinge, d, c, 0.0);
                 for (o, &a) in out.iter_mut().zip(&alphas) {
                     *o += self.hinge_energy(hinge, d, c, a) - before;
@@ -472,11 +470,11 @@ impl Implicit<'_> {
         }
 
         if let Some((offsets, refs, membranes)) = self.el.membranes {
-            for &r in &refs[offsets[i] as usize..offsets[i + 1] as usize] {
+            let range = offsets[i] as usize..offsets[i + 1] as usize;
+            for (&r, m) in refs[range.clone()].iter().zip(&membranes[range]) {
                 if r % 4 != 0 {
                     continue;
                 }
-                let m = &membranes[(r / 4) as usize];
                 let step = MembraneStep::at(m, self.prev, d);
                 let dw = [
                     super::membrane::image(m, &step.a, c),
@@ -489,11 +487,11 @@ impl Implicit<'_> {
         }
 
         if let Some((offsets, refs, seams)) = self.el.seams {
-            for &r in &refs[offsets[i] as usize..offsets[i + 1] as usize] {
+            let range = offsets[i] as usize..offsets[i + 1] as usize;
+            for (&r, s) in refs[range.clone()].iter().zip(&seams[range]) {
                 if r % 4 != 0 {
                     continue;
                 }
-                let s = &seams[(r / 4) as usize];
                 let (gap, opening) = self.seam_gap(s, d);
                 let dg = seam_combination(s, c);
                 let rest = rest_gap(s, p, self.step.time);
