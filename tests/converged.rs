@@ -112,16 +112,18 @@ fn potential(s: &Implicit, d: &[Vec4]) -> (f64, f64) {
             add(0.5 * sp.damping as f64 / h * dn * dn);
         }
     }
-    if let Some((_, _, hinges)) = el.hinges {
-        for hinge in hinges {
+    // The element lists hold each element once per vertex it acts on (at the vertex's ref):
+    // each counts once, at its role-0 ref, as the solve's own energy change counts it.
+    if let Some((_, refs, hinges)) = el.hinges {
+        for (hinge, _) in hinges.iter().zip(refs).filter(|(_, &r)| r % 4 == 0) {
             let x = hinge.v.map(|v| d3(s.prev[v as usize]) + d3(d[v as usize]));
             if let Some(sh) = sin_half(x) {
                 add(hinge.rest_weight as f64 * hinge_psi(sh as f32, hinge.rest_sin_half) as f64);
             }
         }
     }
-    if let Some((_, _, seams)) = el.seams {
-        for seam in seams {
+    if let Some((_, refs, seams)) = el.seams {
+        for (seam, _) in seams.iter().zip(refs).filter(|(_, &r)| r % 4 == 0) {
             let w = seam.weight as f64;
             let [a, b0, b1] = [seam.v[0], seam.v[1], seam.v[2]].map(|v| v as usize);
             let x = |k: usize| d3(s.prev[k]) + d3(d[k]);

@@ -228,9 +228,10 @@ impl Case {
 struct SecantJitter {
     /// Per vertex, a bound for any block of its row, in N/m.
     row: Vec<f32>,
-    /// Per vertex, the move of its diagonal block as a sum of Jₑ·c²·n̂n̂ᵀ over its buckled
-    /// elements (c its coefficient in the element, n̂ the element's direction).
-    diagonal: Vec<Mat3>,
+    /// The moves of free vertices' diagonal blocks, one Jₑ·c²·n̂n̂ᵀ per buckled element and
+    /// vertex: (the vertex, Jₑ·c², n̂), c the vertex's coefficient in the element, n̂ the
+    /// element's direction.
+    diagonal: Vec<(usize, f32, Vec3)>,
 }
 
 impl Case {
@@ -246,12 +247,11 @@ impl Case {
         let r = p.buckled_fraction;
         let mut out = SecantJitter {
             row: vec![0.0; x.len()],
-            diagonal: vec![Mat3::ZERO; x.len()],
+            diagonal: Vec::new(),
         };
         if r == 0.0 {
             return out;
         }
-        let outer = |n: Vec3| Mat3::from_cols(n * n.x, n * n.y, n * n.z);
         let world: Vec<Vec4> = (self.state.positions.iter().zip(x))
             .map(|(p, d)| (p.truncate() + d.truncate()).extend(p.w))
             .collect();
@@ -272,7 +272,7 @@ impl Case {
                 let moved = spring.stiffness * o * (1.0 - r) * ds / (s * s);
                 for v in [a, b] {
                     out.row[v] += moved;
-                    out.diagonal[v] += moved * outer(e.normalize());
+                    out.diagonal.push((v, moved, e.normalize()));
                 }
             }
         }
@@ -290,11 +290,14 @@ impl Case {
                     for (role, &v) in m.v[..3].iter().enumerate() {
                         out.row[v as usize] += largest * largest * moved;
                         let own = coefficient(role) * coefficient(role) * moved;
-                        out.diagonal[v as usize] += own * outer(w.normalize());
+                        out.diagonal.push((v as usize, own, w.normalize()));
                     }
                 }
             }
         }
+        // A pinned vertex has no block to move.
+        out.diagonal
+            .retain(|&(v, _, _)| self.state.positions[v].w != 0.0);
         out
     }
 }
@@ -519,20 +522,23 @@ fn check_sweep(g: &mut GpuSolver, c: &mut Case) {
     // out), a few roundings per term: ≲ 16ε·ℓ per step. Later colours read the earlier ones'
     // new positions, and a Gauss–Seidel sweep passes such differences on undamped at most (H is
     // diagonally dominant), so they add up over the colours.
-    // With buckling, a vertex's block H moves by δH, its buckled elements' secant jitter
-    // (`secant_jitter`), and its step Δ = H⁻¹f by H⁻¹·δH·Δ to first order (H and Δ as the
-    // CPU's sweep has them, H taken at the sweep's start); passed on over the colours alike.
-    let jitter = c.secant_jitter(&c.x).diagonal;
-    let secant = c.with(|s| {
-        (0..x.len())
-            .filter(|&i| jitter[i] != Mat3::ZERO)
-            .map(|i| {
-                let h = s.vertex_system(i, &c.x, None, &mut |_, _| {}).hessian;
-                let step = (x[i] - c.x[i]).truncate();
-                (h.inverse() * (jitter[i] * step)).length()
-            })
-            .fold(0.0f32, f32::max)
+    // With buckling, a vertex's block H moves by δH = Σₑ Jₑ·c²·n̂ₑn̂ₑᵀ over its buckled
+    // elements (`secant_jitter`), and its step Δ = H⁻¹f by H⁻¹·δH·Δ to first order, at most
+    // Σₑ Jₑ·c²·|H⁻¹n̂ₑ|·|n̂ₑ·Δ| (H and Δ as the CPU's sweep has them, H taken at the sweep's
+    // start); passed on over the colours alike.
+    let mut secant = vec![0.0f32; x.len()];
+    c.with(|s| {
+        let mut inverse = std::collections::HashMap::new();
+        for (v, moved, n) in c.secant_jitter(&c.x).diagonal {
+            let h_inv = *inverse.entry(v).or_insert_with(|| {
+                let h = s.vertex_system(v, &c.x, None, &mut |_, _| {}).hessian;
+                h.inverse()
+            });
+            let step = (x[v] - c.x[v]).truncate();
+            secant[v] += moved * (h_inv * n).length() * n.dot(step).abs();
+        }
     });
+    let secant = secant.into_iter().fold(0.0f32, f32::max);
     let bound = (16.0 * EPS * c.longest_edge() + secant) * coloring.colors() as f32;
     let got = g.solve_array(SolveArray::Displacement).unwrap();
     c.x = x;
