@@ -445,3 +445,56 @@ impl Newton {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::{GridPlane, TriMesh};
+    use crate::scene::{Fabric, Orthotropic};
+    use glam::Vec3;
+
+    fn fabric(membrane: Option<Orthotropic>) -> Fabric {
+        Fabric {
+            density: 0.2,
+            stretch_stiffness: 100.0,
+            bending_stiffness: Some(1e-5),
+            damping_ratio: 0.05,
+            preset: None,
+            membrane,
+            buckling: false,
+        }
+    }
+
+    #[test]
+    fn each_ref_holds_the_element_it_names_and_the_vertex_at_its_role() {
+        let mesh = TriMesh::grid(1.0, 1.0, 6, 5, Vec3::ZERO, GridPlane::Xy);
+        let membrane = Orthotropic {
+            warp: 100.0,
+            weft: 50.0,
+            shear: 5.0,
+        };
+        for model in [None, Some(membrane)].map(|m| ClothModel::from_mesh(&mesh, &fabric(m), &[])) {
+            let elements = Elements::new(&model);
+            let el = elements.view();
+            let (offsets, refs, hinges) = el.hinges.expect("the grid bends");
+            assert_eq!(hinges.len(), refs.len());
+            for i in 0..model.len() {
+                for k in offsets[i] as usize..offsets[i + 1] as usize {
+                    let r = refs[k];
+                    assert_eq!(hinges[k], model.hinges[(r / 4) as usize]);
+                    assert_eq!(hinges[k].v[(r % 4) as usize] as usize, i);
+                }
+            }
+            if let Some((offsets, refs, membranes)) = el.membranes {
+                assert_eq!(membranes.len(), refs.len());
+                for i in 0..model.len() {
+                    for k in offsets[i] as usize..offsets[i + 1] as usize {
+                        let r = refs[k];
+                        assert_eq!(membranes[k], model.membranes[(r / 4) as usize]);
+                        assert_eq!(membranes[k].v[(r % 4) as usize] as usize, i);
+                    }
+                }
+            }
+        }
+    }
+}
