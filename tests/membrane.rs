@@ -18,6 +18,7 @@ const COTTON: Orthotropic = Orthotropic {
     warp: 4033.0,
     weft: 4069.9,
     shear: 52.0,
+    bending: None,
 };
 
 /// A 0.5 m square sheet of 9 × 9 particles in the xy plane, its warp `grain` radians from x, no
@@ -397,4 +398,85 @@ fn bias_cut_strip_stretches_as_its_shear_says() {
         bias > 0.56 * free && bias < free,
         "bias: {bias} m, lateral-free {free} m"
     );
+}
+
+/// A grid cloth's hinges as a denim membrane with its warp `grain_deg` from the grid's width
+/// (x), and the same cloth as springs: (edge direction, membrane hinge, springs hinge) each.
+fn denim_hinges(
+    grain_deg: f32,
+) -> Vec<(
+    Vec3,
+    drapekit::model::layout::Hinge,
+    drapekit::model::layout::Hinge,
+)> {
+    let scene = |model: &str| {
+        let toml = format!(
+            "[cloth.grid]\nwidth_m = 0.2\nheight_m = 0.2\ncolumns = 9\nrows = 9\n\
+             center_m = [0.0, 1.0, 0.0]\n\n[fabric]\npreset = \"denim\"\nmodel = \"{model}\"\n{}",
+            if model == "membrane" {
+                format!("grain_deg = {grain_deg}\n")
+            } else {
+                String::new()
+            }
+        ) + "\n[solver]\nfps = 24\nframes = 1\n";
+        let scene = Scene::parse(&toml, std::path::Path::new("denim.toml")).expect("parses");
+        prepare(&scene).expect("prepares").model
+    };
+    let (membrane, springs) = (scene("membrane"), scene("springs"));
+    assert_eq!(membrane.hinges.len(), springs.hinges.len());
+    let p = |i: u32| membrane.positions[i as usize];
+    (membrane.hinges.iter().zip(&springs.hinges))
+        .map(|(m, s)| ((p(m.v[1]) - p(m.v[0])).normalize(), *m, *s))
+        .collect()
+}
+
+#[test]
+fn a_membrane_bends_across_each_hinge_as_its_direction_was_measured() {
+    // Denim's strips (W11's hinge rows): 2.424e-5 N·m along the warp, 1.605e-5 along the weft;
+    // a hinge's coefficient is 4·B. A hinge whose edge runs across the warp folds what a warp
+    // strip bends, and takes k̄ + 3/2·Δ (k̄ the strips' mean, Δ half their difference: what an
+    // even spread of hinge directions needs to bend a warp strip at the warp's rigidity,
+    // `model::bending`); one along the warp k̄ − 3/2·Δ.
+    let [warp, weft] = [2.424e-5f32, 1.605e-5].map(|b| 4.0 * b);
+    let (mean, delta) = (0.5 * (warp + weft), 0.5 * (warp - weft));
+    let isotropic = 4.0 * 1.97e-5f32;
+    for grain_deg in [0.0f32, 90.0] {
+        let (s, c) = grain_deg.to_radians().sin_cos();
+        let warp_dir = Vec3::new(c, s, 0.0);
+        let (mut along, mut across) = (0, 0);
+        for (edge, m, s) in denim_hinges(grain_deg) {
+            // The springs bend alike every way.
+            assert!(
+                (s.stiffness / isotropic - 1.0).abs() < 1e-3,
+                "{}",
+                s.stiffness
+            );
+            // Edges along or across the warp, to their angle's rounding (1e-5 relative).
+            let c = edge.dot(warp_dir).abs();
+            let expected = if c > 1.0 - 1e-6 {
+                along += 1;
+                mean - 1.5 * delta
+            } else if c < 1e-6 {
+                across += 1;
+                mean + 1.5 * delta
+            } else {
+                // A diagonal of the grid: between the two.
+                let k = m.stiffness;
+                assert!(k > mean - 1.5 * delta && k < mean + 1.5 * delta, "{k}");
+                continue;
+            };
+            assert!(
+                (m.stiffness / expected - 1.0).abs() < 1e-5,
+                "{} vs {expected}",
+                m.stiffness
+            );
+            // The rest weight is linear in the coefficient: the same geometry as the springs'.
+            let ratio = (m.rest_weight / m.stiffness) / (s.rest_weight / s.stiffness);
+            assert!((ratio - 1.0).abs() < 1e-5, "rest weight ratio {ratio}");
+        }
+        assert!(
+            along > 20 && across > 20,
+            "{along} along, {across} across the warp"
+        );
+    }
 }

@@ -472,6 +472,7 @@ mod tests {
             warp: 100.0,
             weft: 50.0,
             shear: 5.0,
+            bending: None,
         };
         for model in [None, Some(membrane)].map(|m| ClothModel::from_mesh(&mesh, &fabric(m), &[])) {
             let elements = Elements::new(&model);

@@ -232,10 +232,10 @@ impl Scene {
         };
         let pinned: Vec<u32> = scene_pins.iter().chain(&attached).copied().collect();
         let mut model = ClothModel::from_mesh(&mesh, &self.fabric, &pinned);
-        if self.fabric.membrane.is_some() {
-            let grain = self.grain_directions(&mesh, garment.as_ref())?;
-            model.set_grain(&grain, &self.fabric);
-        }
+        let grain = match self.fabric.membrane {
+            Some(_) => Some(self.grain_directions(&mesh, garment.as_ref())?),
+            None => None,
+        };
         for (i, b) in self.bodies.iter().enumerate() {
             let collider = build_collider(b, &self.checker(), &self.body_table(i))?;
             model.colliders.push(std::sync::Arc::new(collider));
@@ -312,6 +312,10 @@ impl Scene {
                     }
                 })
                 .collect();
+        }
+        // After the seams' hinges, which bend by direction too.
+        if let Some(grain) = grain {
+            model.set_grain(&grain, &self.fabric);
         }
         model.multigrid = self
             .build_multigrid(&model, garment.as_ref())

@@ -2,6 +2,7 @@
 //! incidence lists that let each particle gather its forces without atomics, and the
 //! parameter structs both backends share (`layout`, mirrored by `kernels/common.wgsl`).
 
+pub mod bending;
 pub mod budget;
 mod build;
 mod collider;
@@ -304,7 +305,8 @@ impl ClothModel {
     }
 
     /// Lays the membrane's warp along `grain` (one direction per triangle of `triangles`),
-    /// rebuilding it for `fabric` (nothing without a membrane).
+    /// rebuilding it for `fabric` and, where the fabric bends by direction, setting each hinge's
+    /// bending by its edge's angle to the grain (nothing without a membrane).
     pub fn set_grain(&mut self, grain: &[Vec3], fabric: &crate::scene::Fabric) {
         if let Some(m) = &fabric.membrane {
             self.membranes = membrane::build_membranes(
@@ -315,6 +317,9 @@ impl ClothModel {
                 m,
                 fabric.damping_ratio,
             );
+            if let Some(strips) = m.bending {
+                bending::set_by_direction(self, grain, strips);
+            }
         }
     }
 

@@ -37,6 +37,10 @@ pub struct Orthotropic {
     pub weft: f32,
     /// In-plane shear.
     pub shear: f32,
+    /// The hinge coefficient (N·m, `HINGE_PER_RIGIDITY` times the rigidity) of strips cut along
+    /// the warp, on the bias and along the weft, from the preset's measurements; `None`: the
+    /// fabric's one bending stiffness every way (`model::bending`).
+    pub bending: Option<[f32; 3]>,
 }
 
 impl Orthotropic {
@@ -263,10 +267,19 @@ fn parse_membrane(
                 })?;
                 *out = c.positive("fabric", key, value, "N/m")?;
             }
+            // A scene's own bending_stiffness_n_m bends alike every way; a preset's bends by
+            // direction where it was measured so.
+            let bending = match (f.bending_stiffness_n_m, preset) {
+                (None, Some(p)) => {
+                    Some(p.strip_bending_n_m.map(|b| (HINGE_PER_RIGIDITY * b) as f32))
+                }
+                _ => None,
+            };
             Ok(Some(Orthotropic {
                 warp: v[0],
                 weft: v[1],
                 shear: v[2],
+                bending,
             }))
         }
         Some(other) => Err(c.err(

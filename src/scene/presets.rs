@@ -41,6 +41,9 @@ pub struct FabricPreset {
     pub weft_stiffness_n_m: f64,
     /// In-plane shear, in N/m per radian (τ/γ).
     pub shear_stiffness_n_m: f64,
+    /// The membrane's bending rigidity B of a strip cut along the warp, on the bias (45°) and
+    /// along the weft, in N·m (`bending_stiffness_n_m` is the isotropic springs' value).
+    pub strip_bending_n_m: [f64; 3],
     /// Spring damping as a fraction of critical.
     pub damping_ratio: f64,
     /// Where the values come from, in one line.
@@ -64,6 +67,10 @@ pub const PRESETS: &[FabricPreset] = &[
         warp_stiffness_n_m: 4033.0,
         weft_stiffness_n_m: 4069.9,
         shear_stiffness_n_m: 52.0,
+        // Strips along u, on the bias, along v: the 90°, 45° and 0° hinge rows (a hinge's angle
+        // is its edge's, and a strip along u bends across edges at 90°), /4: 125.41e-6,
+        // 107.998e-6, 125.41e-6 → 3.135e-5, 2.700e-5, 3.135e-5 N·m [D].
+        strip_bending_n_m: [3.135e-5, 2.700e-5, 3.135e-5],
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "W11 royal-target (65/35 cotton/PES woven), proxy for shirting [M/D]",
@@ -83,6 +90,9 @@ pub const PRESETS: &[FabricPreset] = &[
         warp_stiffness_n_m: 410.5,
         weft_stiffness_n_m: 2026.8,
         shear_stiffness_n_m: 27.0,
+        // Strips along u, on the bias, along v: the 90°, 45° and 0° hinge rows /4: 96.952e-6,
+        // 73.385e-6, 64.196e-6 → 2.424e-5, 1.835e-5, 1.605e-5 N·m [D].
+        strip_bending_n_m: [2.424e-5, 1.835e-5, 1.605e-5],
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "W11 11oz-black-denim [M/D]; bending agrees with KES denim [M→D]",
@@ -101,6 +111,8 @@ pub const PRESETS: &[FabricPreset] = &[
         warp_stiffness_n_m: 500.0,
         weft_stiffness_n_m: 500.0,
         shear_stiffness_n_m: 6.4,
+        // One class median, no direction [P].
+        strip_bending_n_m: [2.6e-6, 2.6e-6, 2.6e-6],
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "density vendor [low]; stretch ppf note [2]; bending Feng 2022 < 0.1 kg/m² [P]",
@@ -118,6 +130,9 @@ pub const PRESETS: &[FabricPreset] = &[
         warp_stiffness_n_m: 4004.2,
         weft_stiffness_n_m: 4055.0,
         shear_stiffness_n_m: 9.6,
+        // Strips along u, on the bias, along v: the 90°, 45° and 0° hinge rows /4: 31.283e-6,
+        // 40.659e-6, 51.714e-6 → 7.82e-6, 1.016e-5, 1.293e-5 N·m [D].
+        strip_bending_n_m: [7.82e-6, 1.016e-5, 1.293e-5],
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "W11 white-dots-on-blk (100 % polyester tablecloth) [M/D]",
@@ -137,6 +152,9 @@ pub const PRESETS: &[FabricPreset] = &[
         warp_stiffness_n_m: 20.66,
         weft_stiffness_n_m: 42.92,
         shear_stiffness_n_m: 18.0,
+        // Strips along u, on the bias, along v: the 90°, 45° and 0° hinge rows /4: 14.268e-6,
+        // 24.750e-6, 23.192e-6 → 3.57e-6, 6.19e-6, 5.80e-6 N·m [D].
+        strip_bending_n_m: [3.57e-6, 6.19e-6, 5.80e-6],
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "W11 gray-interlock (60/40 cotton/PES knit) [M/D]",
@@ -156,6 +174,9 @@ pub const PRESETS: &[FabricPreset] = &[
         warp_stiffness_n_m: 3.0e3,
         weft_stiffness_n_m: 3.0e3,
         shear_stiffness_n_m: 38.5,
+        // Strips: the class medians warp 2.0e-5 and weft 1.5e-5; no bias value was measured, so
+        // the bias takes their geometric mean, 1.73e-5 N·m [P].
+        strip_bending_n_m: [2.0e-5, 1.73e-5, 1.5e-5],
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "density assumed; stretch FAST note [2]; bending Feng 2022 0.2–0.3 kg/m² [P]",
@@ -176,6 +197,8 @@ pub const PRESETS: &[FabricPreset] = &[
         warp_stiffness_n_m: 5.78e4,
         weft_stiffness_n_m: 5.78e4,
         shear_stiffness_n_m: 1.925e4,
+        // Leather has no weave: the same rigidity every way [P].
+        strip_bending_n_m: [1.73e-5, 1.73e-5, 1.73e-5],
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "density Unreal [low]; stretch Efendioglu via ppf [2]; bending Feng 2022 [P]",
@@ -261,30 +284,30 @@ mod tests {
     #[test]
     fn w11_conversions_reproduce_the_presets() {
         // Zero-strain stretching row [k0, k1, k2, k3] / 2 and the first bending column for the
-        // 0° and 90° hinges, as printed in the W11 material files.
-        let rows: [(&str, [f64; 3], [f64; 2]); 4] = [
+        // 0°, 45° and 90° hinges, as printed in the W11 material files.
+        let rows: [(&str, [f64; 3], [f64; 3]); 4] = [
             (
                 "cotton",
                 [2016.55456, 9.170511, 2034.97644],
-                [125.409805e-6, 125.409805e-6],
+                [125.409805e-6, 107.997696e-6, 125.409805e-6],
             ),
             (
                 "denim",
                 [205.352005, 10.234077, 1013.88629],
-                [64.196457e-6, 96.951576e-6],
+                [64.196457e-6, 73.384567e-6, 96.951576e-6],
             ),
             (
                 "polyester",
                 [2002.08618, 0.345588, 2027.48559],
-                [51.713814e-6, 31.282822e-6],
+                [51.713814e-6, 40.659470e-6, 31.282822e-6],
             ),
             (
                 "jersey",
                 [16.593832, -14.695990, 34.477123],
-                [23.191698e-6, 14.267624e-6],
+                [23.191698e-6, 24.749964e-6, 14.267624e-6],
             ),
         ];
-        for (name, [h0, h1, h2], [ke0, ke90]) in rows {
+        for (name, [h0, h1, h2], [ke0, ke45, ke90]) in rows {
             let (k0, k1, k2) = (2.0 * h0, 2.0 * h1, 2.0 * h2);
             let free_u = k0 - k1 * k1 / k2;
             let free_v = k2 - k1 * k1 / k0;
@@ -302,6 +325,15 @@ mod tests {
             assert!(close(p.stretch_stiffness_n_m, k, 0.005), "{name}: {k}");
             let b = (ke0 * ke90).sqrt() / 4.0;
             assert!(close(p.bending_stiffness_n_m, b, 0.005), "{name}: {b}");
+            // A hinge's angle is its edge's: a strip along the warp (u) bends across the 90°
+            // hinges, a strip along the weft across the 0° ones.
+            for (got, ke) in p.strip_bending_n_m.iter().zip([ke90, ke45, ke0]) {
+                assert!(
+                    close(*got, ke / 4.0, 0.005),
+                    "{name}: {got} vs {}",
+                    ke / 4.0
+                );
+            }
         }
         // The W11 files give areal density in kg/m²: 220, 324, 128 and 187 g/m² / 1000.
         let densities = [

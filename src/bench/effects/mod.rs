@@ -230,11 +230,13 @@ fn membrane_of(fabric: &crate::scene::Fabric) -> Orthotropic {
         warp: p.warp_stiffness_n_m as f32,
         weft: p.weft_stiffness_n_m as f32,
         shear: p.shear_stiffness_n_m as f32,
+        bending: None,
     });
     (fabric.membrane.or(from_preset)).unwrap_or(Orthotropic {
         warp: k,
         weft: k,
         shear: 0.1 * k,
+        bending: None,
     })
 }
 

@@ -207,7 +207,13 @@ fn cantilever_row(
     step: &Stepping,
     (test, grain_deg): (&'static str, f64),
 ) -> Result<FabricRow, Error> {
-    let (b, w) = (p.bending_stiffness_n_m, p.density_kg_m2 * GRAVITY);
+    let b = specimen::strip_rigidity(p, step, grain_deg);
+    // The row reports the rigidity this strip was given.
+    let p = &FabricPreset {
+        bending_stiffness_n_m: b,
+        ..*p
+    };
+    let w = p.density_kg_m2 * GRAVITY;
     let expected = cantilever::elastica_overhang(b, w);
     // About 16 particles along the expected overhang (12 with --quick).
     let spacing = expected / if quick { 12.0 } else { 16.0 };

@@ -62,6 +62,21 @@ pub fn bending_rigidity(preset: &crate::scene::FabricPreset, step: &Stepping) ->
     preset.bending_stiffness_n_m * step.bending_scale.unwrap_or(1.0)
 }
 
+/// The bending rigidity a strip of `preset` cut `grain_deg` from the warp is given, N·m, where
+/// `preset.bending_stiffness_n_m` is already the specimens' (`bending_rigidity`): with the
+/// membrane, the preset's rigidity for strips of that direction (warp, bias or weft: the
+/// membrane bends by direction, `model::bending`); else, or when the bending is scaled (a
+/// scaled rigidity is one value every way), that one value.
+pub fn strip_rigidity(preset: &crate::scene::FabricPreset, step: &Stepping, grain_deg: f64) -> f64 {
+    let [warp, bias, weft] = preset.strip_bending_n_m;
+    match (step.fabric_model.as_str(), step.bending_scale) {
+        ("membrane", None) if grain_deg == 0.0 => warp,
+        ("membrane", None) if grain_deg == 45.0 => bias,
+        ("membrane", None) if grain_deg == 90.0 => weft,
+        _ => preset.bending_stiffness_n_m,
+    }
+}
+
 /// A settled specimen.
 #[derive(Clone, Debug)]
 pub struct Settled {
