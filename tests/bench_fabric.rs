@@ -343,3 +343,37 @@ fn buckling_drapes_leather_further_with_springs_and_with_the_membrane() {
         );
     }
 }
+
+#[test]
+fn a_denim_membrane_bends_its_warp_and_weft_strips_by_their_own_rigidity() {
+    // Denim's warp strip is 1.51 times as stiff as its weft strip (2.424e-5 against 1.605e-5
+    // N·m). Bending by direction gives the strips G in that ratio, within the quick test's 10%
+    // (the full run: 0.972); one rigidity every way would give them about the same G (a ratio
+    // of about 0.66 here), and the law's sign turned about 0.44.
+    let out = common::out_dir("bench-fabric", "denim-membrane");
+    let r = common::drapekit(&[
+        "bench",
+        "fabric",
+        "--quick",
+        "--presets",
+        "denim",
+        "--tests",
+        "cantilever",
+        "--integrator",
+        "implicit",
+        "--fabric-model",
+        "membrane",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let (_, rows) = common::read_csv(&out.join("fabric.csv"), "sweeps_per_substep");
+    let value = |k: usize, key: &str| common::finite(&rows[k], key);
+    assert_eq!(rows[1]["test"], "cantilever_weft");
+    let ratio = (value(0, "simulated") / value(1, "simulated"))
+        / (value(0, "preset_b_n_m") / value(1, "preset_b_n_m"));
+    assert!(
+        (ratio - 1.0).abs() < 0.1,
+        "warp/weft G over B ratio {ratio}"
+    );
+}

@@ -480,3 +480,40 @@ fn a_membrane_bends_across_each_hinge_as_its_direction_was_measured() {
         );
     }
 }
+
+#[test]
+fn a_scenes_own_warp_and_weft_bending_set_the_hinges() {
+    // Strips of 8e-5 and 4e-5 N·m coefficients: mean 6e-5, half-difference 2e-5, so an edge
+    // along the warp takes 6e-5 − 1.5·2e-5 = 3e-5 and one across it 9e-5 (f32: 1e-5 relative).
+    let toml = "[cloth.grid]\nwidth_m = 0.2\nheight_m = 0.2\ncolumns = 7\nrows = 7\n\
+                center_m = [0.0, 1.0, 0.0]\n\n[fabric]\ndensity_kg_m2 = 0.2\n\
+                stretch_stiffness_n_m = 1000.0\nmodel = \"membrane\"\nwarp_stiffness_n_m = 1000.0\n\
+                weft_stiffness_n_m = 800.0\nshear_stiffness_n_m = 20.0\n\
+                warp_bending_n_m = 8e-5\nweft_bending_n_m = 4e-5\n\n[solver]\nfps = 24\nframes = 1\n";
+    let scene = Scene::parse(toml, std::path::Path::new("own.toml")).expect("parses");
+    // Without bending_stiffness_n_m the one value is the two's geometric mean.
+    let one = scene.fabric.bending_stiffness.expect("the cloth bends");
+    assert!((one / (8e-5f32 * 4e-5).sqrt() - 1.0).abs() < 1e-6, "{one}");
+    let model = prepare(&scene).expect("prepares").model;
+    let p = |i: u32| model.positions[i as usize];
+    let (mut along, mut across) = (0, 0);
+    for h in &model.hinges {
+        let c = (p(h.v[1]) - p(h.v[0])).normalize().dot(Vec3::X).abs();
+        let expected = match c {
+            c if c > 1.0 - 1e-6 => 3e-5,
+            c if c < 1e-6 => 9e-5,
+            _ => continue,
+        };
+        (along, across) = if expected < 6e-5 {
+            (along + 1, across)
+        } else {
+            (along, across + 1)
+        };
+        assert!(
+            (h.stiffness / expected - 1.0).abs() < 1e-5,
+            "{} vs {expected}",
+            h.stiffness
+        );
+    }
+    assert!(along > 10 && across > 10, "{along} along, {across} across");
+}

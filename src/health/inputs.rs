@@ -74,6 +74,18 @@ pub const BENDING: MeasuredRange = MeasuredRange {
     source: "4 × the bending rigidity of 618 garment fabrics (Feng et al. 2022)",
 };
 
+/// The membrane's hinge coefficients of warp and weft strips, against the same range.
+pub const WARP_BENDING: MeasuredRange = MeasuredRange {
+    key: "warp_bending_n_m",
+    ..BENDING
+};
+
+/// See [`WARP_BENDING`].
+pub const WEFT_BENDING: MeasuredRange = MeasuredRange {
+    key: "weft_bending_n_m",
+    ..BENDING
+};
+
 /// Every warning about `scene`'s inputs. Loads its body meshes (not their distance fields) to
 /// measure them: a body in the wrong unit is named before its distance field's size is refused.
 pub fn scene_warnings(scene: &Scene) -> Result<Vec<String>, crate::InputError> {
@@ -111,6 +123,8 @@ pub fn fabric_warnings(scene: &Scene, fabric: &Fabric) -> Vec<String> {
         (WARP, m.map(|m| m.warp as f64)),
         (WEFT, m.map(|m| m.weft as f64)),
         (SHEAR, m.map(|m| m.shear as f64)),
+        (WARP_BENDING, m.and_then(|m| m.bending).map(|b| b[0] as f64)),
+        (WEFT_BENDING, m.and_then(|m| m.bending).map(|b| b[1] as f64)),
     ];
     let mut out = Vec::new();
     for (range, value) in values {

@@ -15,7 +15,7 @@
 //!
 //! Known limits: two values per fabric, so a bias strip bends with the mean of the two; the
 //! measured bias rigidity (W11's 45° rows) differs from it by up to a quarter. Past a warp/weft
-//! ratio of 5 the weak direction's coefficient would be negative: it is held at zero. The
+//! ratio of 5 the weak direction's coefficient would be negative: it is held at 1% of the mean. The
 //! compression law's Euler load (`scene::Fabric::compression_law`) keeps the fabric's one
 //! bending stiffness.
 
@@ -24,22 +24,26 @@ use glam::Vec3;
 use std::collections::HashMap;
 
 /// The coefficient of a hinge whose edge runs `angle` radians from the warp, for the
-/// coefficients `strips` of strips cut along the warp, on the bias and along the weft (the bias
-/// is not used: see the module's note): k̄ − 3/2·Δ·cos 2θ, with k̄ the mean of the warp's and
-/// the weft's and Δ half the warp's less the weft's (the fold direction is the edge's turned
-/// 90°), at least zero.
-pub fn hinge_coefficient(angle: f32, strips: [f32; 3]) -> f32 {
-    let [warp, _, weft] = strips;
+/// coefficients `strips` of strips cut along the warp and along the weft: k̄ − 3/2·Δ·cos 2θ,
+/// with k̄ their mean and Δ half the warp's less the weft's (the fold direction is the edge's
+/// turned 90°), at least `WEAKEST_FOLD` of the mean.
+pub fn hinge_coefficient(angle: f32, strips: [f32; 2]) -> f32 {
+    let [warp, weft] = strips;
     let (mean, half_difference) = (0.5 * (warp + weft), 0.5 * (warp - weft));
-    (mean - 1.5 * half_difference * (2.0 * angle).cos()).max(0.0)
+    (mean - 1.5 * half_difference * (2.0 * angle).cos()).max(WEAKEST_FOLD * mean)
 }
+
+/// The least coefficient a hinge keeps, as a fraction of the warp and weft strips' mean: past a
+/// warp/weft ratio of 5 the law would fold the weak direction for nothing (or less). A hinge
+/// keeps some stiffness, so its rest weight stays tied to it.
+pub const WEAKEST_FOLD: f32 = 0.01;
 
 /// Sets each hinge of `model` whose first three vertices form one of its triangles to the
 /// coefficient its edge takes from `strips` (`hinge_coefficient`), the warp of that triangle
 /// along `grain` (laid into the triangle's plane, as the membrane's; its first edge where the
 /// grain is normal to it). The rest weight, linear in the coefficient, follows. Hinges across
 /// seams rest on their first panel's triangle, so they are set alike.
-pub fn set_by_direction(model: &mut ClothModel, grain: &[Vec3], strips: [f32; 3]) {
+pub fn set_by_direction(model: &mut ClothModel, grain: &[Vec3], strips: [f32; 2]) {
     let key = |v: [u32; 3]| {
         let mut v = v;
         v.sort_unstable();
@@ -81,7 +85,7 @@ mod tests {
 
     #[test]
     fn an_even_spread_of_hinges_bends_warp_and_weft_strips_at_their_own_rigidity() {
-        let strips = [4.0f32, 2.0, 1.0];
+        let strips = [4.0f32, 1.0];
         // A strip bent along ψ feels the hinges' coefficients weighted by cos⁴ of the angle
         // between its direction and theirs (fold direction = edge + 90°). Summed over 3,600
         // evenly spread hinge directions: the warp's 4 and the weft's 1 back, to the sum's
@@ -116,7 +120,7 @@ mod tests {
                 assert!((got - k).abs() < 1e-5, "{a} vs {other}: {k} {got}");
             }
         }
-        // Past a ratio of 5 the weak fold is held at zero, not negative.
-        assert_eq!(hinge_coefficient(0.0, [6.0, 0.0, 1.0]), 0.0);
+        // Past a ratio of 5 the weak fold keeps 1% of the mean, never less.
+        assert_eq!(hinge_coefficient(0.0, [6.0, 1.0]), WEAKEST_FOLD * 3.5);
     }
 }

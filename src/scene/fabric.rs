@@ -38,9 +38,9 @@ pub struct Orthotropic {
     /// In-plane shear.
     pub shear: f32,
     /// The hinge coefficient (N·m, `HINGE_PER_RIGIDITY` times the rigidity) of strips cut along
-    /// the warp, on the bias and along the weft, from the preset's measurements; `None`: the
-    /// fabric's one bending stiffness every way (`model::bending`).
-    pub bending: Option<[f32; 3]>,
+    /// the warp and along the weft (`warp_bending_n_m`, `weft_bending_n_m`, else the preset's
+    /// measurements); `None`: the fabric's one bending stiffness every way (`model::bending`).
+    pub bending: Option<[f32; 2]>,
 }
 
 impl Orthotropic {
@@ -169,8 +169,12 @@ pub(super) fn parse(c: &Checker, f: &RawFabric) -> Result<Fabric, InputError> {
         f.stretch_stiffness_n_m,
         preset.map(|p| p.stretch_stiffness_n_m),
     )?;
+    // Bending by direction alone still bends: the springs' and the buckling law's one value is
+    // then the geometric mean of the two, as a preset's is.
+    let by_direction = (f.warp_bending_n_m.zip(f.weft_bending_n_m)).map(|(w, v)| (w * v).sqrt());
     let bending = f
         .bending_stiffness_n_m
+        .or(by_direction.filter(|b| b.is_finite() && *b > 0.0))
         .or(preset.map(|p| HINGE_PER_RIGIDITY * p.bending_stiffness_n_m));
     let damping = f
         .damping_ratio
@@ -218,6 +222,42 @@ fn parse_compression(c: &Checker, f: &RawFabric) -> Result<bool, InputError> {
     }
 }
 
+/// The membrane's bending by direction, as hinge coefficients of warp and weft strips: the
+/// scene's `warp_bending_n_m` and `weft_bending_n_m` (both or neither); else the preset's
+/// measured strips, unless the scene writes its own `bending_stiffness_n_m` (one value every
+/// way); else none.
+fn parse_directional_bending(
+    c: &Checker,
+    f: &RawFabric,
+    preset: Option<&FabricPreset>,
+) -> Result<Option<[f32; 2]>, InputError> {
+    match (f.warp_bending_n_m, f.weft_bending_n_m) {
+        (Some(warp), Some(weft)) => Ok(Some([
+            c.positive("fabric", "warp_bending_n_m", warp, "N·m")?,
+            c.positive("fabric", "weft_bending_n_m", weft, "N·m")?,
+        ])),
+        (Some(_), None) | (None, Some(_)) => {
+            let (given, missing) = match f.warp_bending_n_m {
+                Some(_) => ("warp_bending_n_m", "weft_bending_n_m"),
+                None => ("weft_bending_n_m", "warp_bending_n_m"),
+            };
+            Err(c.err(
+                "fabric",
+                given,
+                format!("{given} without {missing}: bending by direction needs both"),
+                format!("add {missing} (the same value bends alike every way)"),
+            ))
+        }
+        (None, None) => Ok(match (f.bending_stiffness_n_m, preset) {
+            (None, Some(p)) => {
+                let [warp, _, weft] = p.strip_bending_n_m;
+                Some([warp, weft].map(|b| (HINGE_PER_RIGIDITY * b) as f32))
+            }
+            _ => None,
+        }),
+    }
+}
+
 /// `model = "membrane"` (the orthotropic membrane, its warp, weft and shear stiffness from the
 /// keys or the preset) or `"springs"` (the default: isotropic edge springs).
 fn parse_membrane(
@@ -242,9 +282,13 @@ fn parse_membrane(
             preset.map(|p| p.shear_stiffness_n_m),
         ),
     ];
+    let bending_keys = [
+        ("warp_bending_n_m", f.warp_bending_n_m, None),
+        ("weft_bending_n_m", f.weft_bending_n_m, None),
+    ];
     match f.model.as_deref() {
         None | Some("springs") => {
-            if let Some((key, _, _)) = keys.iter().find(|k| k.1.is_some()) {
+            if let Some((key, _, _)) = (keys.iter().chain(&bending_keys)).find(|k| k.1.is_some()) {
                 return Err(c.err(
                     "fabric",
                     key,
@@ -267,14 +311,7 @@ fn parse_membrane(
                 })?;
                 *out = c.positive("fabric", key, value, "N/m")?;
             }
-            // A scene's own bending_stiffness_n_m bends alike every way; a preset's bends by
-            // direction where it was measured so.
-            let bending = match (f.bending_stiffness_n_m, preset) {
-                (None, Some(p)) => {
-                    Some(p.strip_bending_n_m.map(|b| (HINGE_PER_RIGIDITY * b) as f32))
-                }
-                _ => None,
-            };
+            let bending = parse_directional_bending(c, f, preset)?;
             Ok(Some(Orthotropic {
                 warp: v[0],
                 weft: v[1],

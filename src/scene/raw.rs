@@ -125,6 +125,8 @@ pub(super) struct RawFabric {
     pub(super) warp_stiffness_n_m: Option<f64>,
     pub(super) weft_stiffness_n_m: Option<f64>,
     pub(super) shear_stiffness_n_m: Option<f64>,
+    pub(super) warp_bending_n_m: Option<f64>,
+    pub(super) weft_bending_n_m: Option<f64>,
     pub(super) grain_deg: Option<f64>,
     #[serde(default)]
     pub(super) panel_grain_deg: std::collections::BTreeMap<String, f64>,

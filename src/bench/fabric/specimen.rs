@@ -65,14 +65,14 @@ pub fn bending_rigidity(preset: &crate::scene::FabricPreset, step: &Stepping) ->
 /// The bending rigidity a strip of `preset` cut `grain_deg` from the warp is given, N·m, where
 /// `preset.bending_stiffness_n_m` is already the specimens' (`bending_rigidity`): with the
 /// membrane, the preset's rigidity for strips of that direction (warp, bias or weft: the
-/// membrane bends by direction, `model::bending`); else, or when the bending is scaled (a
-/// scaled rigidity is one value every way), that one value.
+/// membrane bends by direction, `model::bending`) times `--bending-scale`; else that one value.
 pub fn strip_rigidity(preset: &crate::scene::FabricPreset, step: &Stepping, grain_deg: f64) -> f64 {
     let [warp, bias, weft] = preset.strip_bending_n_m;
-    match (step.fabric_model.as_str(), step.bending_scale) {
-        ("membrane", None) if grain_deg == 0.0 => warp,
-        ("membrane", None) if grain_deg == 45.0 => bias,
-        ("membrane", None) if grain_deg == 90.0 => weft,
+    let scale = step.bending_scale.unwrap_or(1.0);
+    match step.fabric_model.as_str() {
+        "membrane" if grain_deg == 0.0 => warp * scale,
+        "membrane" if grain_deg == 45.0 => bias * scale,
+        "membrane" if grain_deg == 90.0 => weft * scale,
         _ => preset.bending_stiffness_n_m,
     }
 }
@@ -189,6 +189,14 @@ fn fabric_lines(preset: &str, stretch: Option<f64>, grain_deg: f64, step: &Stepp
     }
     if step.fabric_model == "membrane" {
         s += &format!("model = \"membrane\"\ngrain_deg = {grain_deg}\n");
+        if let (Some(f), Some(p)) = (step.bending_scale, crate::scene::preset(preset)) {
+            // The membrane bends by direction: its warp and weft strips scaled alike.
+            let [warp, _, weft] = p.strip_bending_n_m;
+            for (key, b) in [("warp", warp), ("weft", weft)] {
+                let k = crate::scene::HINGE_PER_RIGIDITY * b * f;
+                s += &format!("{key}_bending_n_m = {k}\n");
+            }
+        }
         if let (Some(k), Some(p)) = (stretch, crate::scene::preset(preset)) {
             for (key, v) in [
                 ("warp", p.warp_stiffness_n_m),
