@@ -4,6 +4,8 @@
 //! blocks its derivative; a rigid rotation costs nothing; and a bias-cut strip hanging under its
 //! own weight stretches as much more than a straight-grain one as the shear stiffness says.
 
+mod common;
+
 use drapekit::cpu::membrane::{image, membrane_force, MembraneStep};
 use drapekit::mesh::{GridPlane, TriMesh};
 use drapekit::model::layout::{Membrane, SimParams};
@@ -516,4 +518,28 @@ fn a_scenes_own_warp_and_weft_bending_set_the_hinges() {
         );
     }
     assert!(along > 10 && across > 10, "{along} along, {across} across");
+}
+
+#[test]
+fn hinges_across_seams_bend_by_direction_too() {
+    // The straight-grain skirt in denim: its seams run along the grain, so the hinges across
+    // them (the model's last ones) fold like the strips of one direction, far from the one
+    // value a seam hinge would keep if it missed the grain (4 × 1.97e-5 N·m). Denim's law spans
+    // k̄ ± 3/2·Δ = 5.60e-5 to 1.052e-4 (k̄ = 8.06e-5, Δ = 1.64e-5).
+    let path = common::fixture("scenes/skirt_straight_grain.toml");
+    let src = std::fs::read_to_string(&path).unwrap();
+    assert!(src.contains("preset = \"cotton\""));
+    let src = src.replacen("preset = \"cotton\"", "preset = \"denim\"", 1);
+    let prep = prepare(&Scene::parse(&src, &path).expect("parses")).expect("prepares");
+    let seams = prep.garment.as_ref().expect("a pattern").seam_hinges.len();
+    assert!(seams > 20, "{seams} seam hinges");
+    let hinges = &prep.model.hinges[prep.model.hinges.len() - seams..];
+    let (low, high) = (5.60e-5 * (1.0 - 1e-3), 1.052e-4 * (1.0 + 1e-3));
+    assert!(hinges.iter().all(|h| (low..=high).contains(&h.stiffness)));
+    let mean = hinges.iter().map(|h| h.stiffness).sum::<f32>() / seams as f32;
+    let isotropic = 4.0 * 1.97e-5;
+    assert!(
+        (mean / isotropic - 1.0).abs() > 0.15,
+        "seam hinges' mean {mean}"
+    );
 }
