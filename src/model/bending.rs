@@ -40,8 +40,7 @@ pub const WEAKEST_FOLD: f32 = 0.01;
 
 /// Sets each hinge of `model` whose first three vertices form one of its triangles to the
 /// coefficient its edge takes from `strips` (`hinge_coefficient`), the warp of that triangle
-/// along `grain` (laid into the triangle's plane, as the membrane's; its first edge where the
-/// grain is normal to it). The rest weight, linear in the coefficient, follows. Hinges across
+/// the membrane's (`membrane::warp_in_plane` of its `grain`). The rest weight, linear in the coefficient, follows. Hinges across
 /// seams rest on their first panel's triangle, so they are set alike.
 pub fn set_by_direction(model: &mut ClothModel, grain: &[Vec3], strips: [f32; 2]) {
     let key = |v: [u32; 3]| {
@@ -58,15 +57,8 @@ pub fn set_by_direction(model: &mut ClothModel, grain: &[Vec3], strips: [f32; 2]
             continue;
         };
         let [x0, x1, x2] = model.triangles[t].map(p);
-        let Some(normal) = (x1 - x0).cross(x2 - x0).try_normalize() else {
-            continue;
-        };
-        let g = grain[t];
-        let warp = (g - g.dot(normal) * normal).try_normalize();
-        let (Some(warp), Some(edge)) = (
-            warp.or_else(|| (x1 - x0).try_normalize()),
-            (p(h.v[1]) - p(h.v[0])).try_normalize(),
-        ) else {
+        let warp = super::membrane::warp_in_plane(x0, x1, x2, grain[t]);
+        let (Some((_, warp)), Some(edge)) = (warp, (p(h.v[1]) - p(h.v[0])).try_normalize()) else {
             continue;
         };
         let angle = edge.dot(warp).abs().min(1.0).acos();

@@ -48,15 +48,23 @@ pub fn build_membranes(
     out
 }
 
+/// A triangle's unit normal and its warp: `grain` laid into the triangle's plane, or its first
+/// edge where the grain is normal to it. `None` for a degenerate triangle.
+pub fn warp_in_plane(x0: Vec3, x1: Vec3, x2: Vec3, grain: Vec3) -> Option<(Vec3, Vec3)> {
+    let e1 = x1 - x0;
+    let n = e1.cross(x2 - x0).try_normalize()?;
+    let warp = (grain - grain.dot(n) * n)
+        .try_normalize()
+        .or_else(|| e1.try_normalize())?;
+    Some((n, warp))
+}
+
 /// (α₁, α₂, β₁, β₂) of a triangle: its warp and weft images are w_u = α₁(x₁ − x₀) + α₂(x₂ − x₀)
 /// and w_v = β₁(x₁ − x₀) + β₂(x₂ − x₀), the columns of the deformation gradient F = D_s·D_m⁻¹
 /// with D_m the rest edges in the warp/weft frame. `None` for a degenerate triangle.
 pub fn warp_weft_shape(x0: Vec3, x1: Vec3, x2: Vec3, grain: Vec3) -> Option<[f32; 4]> {
     let (e1, e2) = (x1 - x0, x2 - x0);
-    let n = e1.cross(e2).try_normalize()?;
-    let warp = (grain - grain.dot(n) * n)
-        .try_normalize()
-        .or_else(|| e1.try_normalize())?;
+    let (n, warp) = warp_in_plane(x0, x1, x2, grain)?;
     let weft = n.cross(warp);
     let rest = Mat2::from_cols(
         Vec2::new(e1.dot(warp), e1.dot(weft)),
