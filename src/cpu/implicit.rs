@@ -465,6 +465,23 @@ mod tests {
         }
     }
 
+    /// Every ref's copy in `(offsets, refs, copies)` is the element of `elements` it names,
+    /// with the ref's vertex at the ref's role of `vertices`.
+    fn each_ref_is_its_element<T: PartialEq + std::fmt::Debug>(
+        (offsets, refs, copies): (&[u32], &[u32], &[T]),
+        elements: &[T],
+        vertices: impl Fn(&T) -> [u32; 4],
+    ) {
+        assert_eq!(copies.len(), refs.len());
+        for i in 0..offsets.len() - 1 {
+            for k in offsets[i] as usize..offsets[i + 1] as usize {
+                let r = refs[k];
+                assert_eq!(copies[k], elements[(r / 4) as usize]);
+                assert_eq!(vertices(&copies[k])[(r % 4) as usize] as usize, i);
+            }
+        }
+    }
+
     #[test]
     fn each_ref_holds_the_element_it_names_and_the_vertex_at_its_role() {
         let mesh = TriMesh::grid(1.0, 1.0, 6, 5, Vec3::ZERO, GridPlane::Xy);
@@ -477,24 +494,10 @@ mod tests {
         for model in [None, Some(membrane)].map(|m| ClothModel::from_mesh(&mesh, &fabric(m), &[])) {
             let elements = Elements::new(&model);
             let el = elements.view();
-            let (offsets, refs, hinges) = el.hinges.expect("the grid bends");
-            assert_eq!(hinges.len(), refs.len());
-            for i in 0..model.len() {
-                for k in offsets[i] as usize..offsets[i + 1] as usize {
-                    let r = refs[k];
-                    assert_eq!(hinges[k], model.hinges[(r / 4) as usize]);
-                    assert_eq!(hinges[k].v[(r % 4) as usize] as usize, i);
-                }
-            }
-            if let Some((offsets, refs, membranes)) = el.membranes {
-                assert_eq!(membranes.len(), refs.len());
-                for i in 0..model.len() {
-                    for k in offsets[i] as usize..offsets[i + 1] as usize {
-                        let r = refs[k];
-                        assert_eq!(membranes[k], model.membranes[(r / 4) as usize]);
-                        assert_eq!(membranes[k].v[(r % 4) as usize] as usize, i);
-                    }
-                }
+            let hinges = el.hinges.expect("the grid bends");
+            each_ref_is_its_element(hinges, &model.hinges, |h| h.v);
+            if let Some(membranes) = el.membranes {
+                each_ref_is_its_element(membranes, &model.membranes, |m| m.v);
             }
         }
     }
