@@ -10,15 +10,49 @@
 @group(0) @binding(25) var<storage, read_write> e: array<vec4<f32>>;
 @group(0) @binding(26) var<storage, read_write> res: array<vec4<f32>>;
 
+// How many of a row's blocks an invocation loads at once (pipeline-overridable: 4 on GPUs, 1
+// on software adapters; src/gpu/array_layout.rs chooses it with the arrays' layout).
+override BLOCKS_IN_FLIGHT: u32 = 1u;
+
+// Block b's product with its column's correction (b: the level's own block index).
+fn block_product(lv: Level, b: u32) -> vec3<f32> {
+    return block_at(lv.block_base + b) * e[lv.vec_base + block_column(lv, b)].xyz;
+}
+
+// `sum` − Σ_b A_b·e_column(b) over a row's blocks first .. end, subtracted one after another in
+// the CPU twins' order (the same bits whatever BLOCKS_IN_FLIGHT is). With four blocks in flight
+// a step's four products load their blocks, columns and corrections independently of each
+// other and of the running sum, so a GPU invocation waits for memory once per four blocks
+// instead of once per block: a coarse level's row has dozens of blocks, and a colour takes as
+// long as its longest row. Software adapters run invocations in SIMD lanes, where the wait is
+// not the cost; they take the blocks one at a time.
+fn subtract_row_products(sum0: vec3<f32>, lv: Level, first: u32, end: u32) -> vec3<f32> {
+    var sum = sum0;
+    var b = first;
+    if (BLOCKS_IN_FLIGHT == 4u) {
+        for (; b + 4u <= end; b = b + 4u) {
+            let x0 = block_product(lv, b);
+            let x1 = block_product(lv, b + 1u);
+            let x2 = block_product(lv, b + 2u);
+            let x3 = block_product(lv, b + 3u);
+            sum = sum - x0;
+            sum = sum - x1;
+            sum = sum - x2;
+            sum = sum - x3;
+        }
+    }
+    for (; b < end; b = b + 1u) {
+        sum = sum - block_product(lv, b);
+    }
+    return sum;
+}
+
 // Row r's correction after one block Gauss–Seidel update:
 // A_rr⁻¹(rhs_r − Σ_{c≠r} A_rc·e_c) (zero where A_rr is singular: a pinned particle).
 fn smooth_row(lv: Level, r: u32) -> vec3<f32> {
     let start = row_start(lv, r);
     let end = row_start(lv, r + 1u);
-    var sum = rhs[lv.vec_base + r].xyz;
-    for (var b = start + 1u; b < end; b = b + 1u) {
-        sum = sum - block_at(lv.block_base + b) * e[lv.vec_base + block_column(lv, b)].xyz;
-    }
+    let sum = subtract_row_products(rhs[lv.vec_base + r].xyz, lv, start + 1u, end);
     return solve3(block_at(lv.block_base + start), sum);
 }
 
@@ -26,11 +60,7 @@ fn smooth_row(lv: Level, r: u32) -> vec3<f32> {
 fn residual_row(lv: Level, r: u32) -> vec3<f32> {
     let start = row_start(lv, r);
     let end = row_start(lv, r + 1u);
-    var sum = rhs[lv.vec_base + r].xyz;
-    for (var b = start; b < end; b = b + 1u) {
-        sum = sum - block_at(lv.block_base + b) * e[lv.vec_base + block_column(lv, b)].xyz;
-    }
-    return sum;
+    return subtract_row_products(rhs[lv.vec_base + r].xyz, lv, start, end);
 }
 
 // Coarse particle c's restricted residual: its finer children's residuals times their

@@ -60,6 +60,19 @@ impl ArrayLayout {
         }
     }
 
+    /// How many of a matrix row's blocks an invocation of the multigrid kernels loads at once
+    /// (`BLOCKS_IN_FLIGHT` in multigrid.wgsl; the same numbers either way). GPUs hide a load's
+    /// latency with other loads in flight, and a coarse level's rows of dozens of blocks are
+    /// where the implicit solve waits. Software adapters run invocations in SIMD lanes, where
+    /// four in flight cost more than they hide: the cotton T-shirt's first four frames on
+    /// lavapipe took 3.9–4.6 s with four against 3.5–3.8 s with one.
+    pub fn blocks_in_flight(self) -> u32 {
+        match self {
+            ArrayLayout::Textures => 1,
+            ArrayLayout::Buffers => 4,
+        }
+    }
+
     /// The name summaries and benchmarks print.
     pub fn name(self) -> &'static str {
         match self {

@@ -188,7 +188,7 @@ pub(super) fn build_stage(
     let group0 = numbered(state_bindings[0]);
     let group1 = force_in_bindings.map(numbered).unwrap_or_default();
     let source = bind_as_buffers(source, &[(0, &group0), (1, &group1)]);
-    let pipeline = compute_pipeline(device, pass.name(), source, "main", &layouts);
+    let pipeline = compute_pipeline(device, pass.name(), source, "main", &layouts, &[]);
     Stage {
         pass,
         pipeline,
@@ -204,13 +204,14 @@ pub(super) fn build_stage(
 }
 
 /// The compute pipeline of entry point `entry` of the WGSL `source`, over bind groups of
-/// `layouts` (group 0 first).
+/// `layouts` (group 0 first), with its pipeline-overridable `constants` (name, value).
 pub(super) fn compute_pipeline(
     device: &wgpu::Device,
     label: &str,
     source: String,
     entry: &str,
     layouts: &[&wgpu::BindGroupLayout],
+    constants: &[(&str, f64)],
 ) -> wgpu::ComputePipeline {
     let layouts: Vec<_> = layouts.iter().map(|l| Some(*l)).collect();
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -227,7 +228,10 @@ pub(super) fn compute_pipeline(
         layout: Some(&layout),
         module: &module,
         entry_point: Some(entry),
-        compilation_options: Default::default(),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            ..Default::default()
+        },
         cache: None,
     })
 }

@@ -162,6 +162,7 @@ impl ImplicitSolve {
             params: shared.params,
             substeps: shared.substeps,
             pos: shared.pos,
+            layout: ctx.layout,
         };
         let pipelines = resources.pipelines(device, &kernels, energies);
         let mut solve = ImplicitSolve {

@@ -2,10 +2,10 @@
 //! them.
 
 use super::hierarchy::Packed;
-use super::kernels::{Res, SolveKernel};
+use super::kernels::{Include, Res, SolveKernel};
 use super::layout::{OpParams, SolveControl, SolveScalars};
 use crate::error::Error;
-use crate::gpu::array_layout::bind_as_buffers;
+use crate::gpu::array_layout::{bind_as_buffers, ArrayLayout};
 use crate::gpu::context::GpuContext;
 use crate::gpu::elements::{element_arrays, Elements};
 use crate::gpu::kernels::VbdEnergies;
@@ -201,6 +201,8 @@ pub(super) struct Resources<'a> {
     pub(super) params: &'a wgpu::Buffer,
     pub(super) substeps: &'a wgpu::Buffer,
     pub(super) pos: &'a [TexelArray; 2],
+    /// Where the arrays live, which also sets the multigrid kernels' loads in flight.
+    pub(super) layout: ArrayLayout,
 }
 
 impl<'a> Resources<'a> {
@@ -277,7 +279,13 @@ impl<'a> Resources<'a> {
         let label = kernel.file();
         let (layout, groups) = numbered_bind_groups(device, label, [&l0[..], &l1[..]]);
         let source = bind_as_buffers(kernel.compose(energies).source, &[(0, &l0)]);
-        let pipeline = compute_pipeline(device, label, source, kernel.entry(), &[&layout]);
+        let in_flight = [("BLOCKS_IN_FLIGHT", self.layout.blocks_in_flight() as f64)];
+        let constants = match kernel.includes().contains(&Include::Multigrid) {
+            true => &in_flight[..],
+            false => &[],
+        };
+        let entry = kernel.entry();
+        let pipeline = compute_pipeline(device, label, source, entry, &[&layout], constants);
         KernelPipeline { pipeline, groups }
     }
 }
