@@ -16,8 +16,23 @@ const CYCLE_RESIDUAL: u32 = 1u;
 const CYCLE_RESTRICT: u32 = 2u;
 const CYCLE_PROLONG: u32 = 3u;
 
+// One sweep over a level's colours. A level of at most CACHE_ROWS rows is smoothed in
+// workgroup memory: its correction is copied in, each colour reads and writes the copy (a
+// row's dozens of corrections are then near loads, not trips to memory behind a storage
+// barrier), and the copy goes back at the end. The same values either way.
 fn smooth_level(l: u32, backward: bool, lid: u32) {
     let lv = level(l);
+    let cache = CACHE_ROWS > 0u && lv.rows <= CACHE_ROWS;
+    if (cache) {
+        for (var r = lid; r < lv.rows; r = r + WORKGROUP_SIZE) {
+            let v = e[lv.vec_base + r];
+            e_cache[3u * r] = v.x;
+            e_cache[3u * r + 1u] = v.y;
+            e_cache[3u * r + 2u] = v.z;
+        }
+        workgroupBarrier();
+        cached = true;
+    }
     for (var k = 0u; k < lv.colours; k = k + 1u) {
         var c = k;
         if (backward) {
@@ -26,9 +41,29 @@ fn smooth_level(l: u32, backward: bool, lid: u32) {
         let end = colour_start(lv, c + 1u);
         for (var t = colour_start(lv, c) + lid; t < end; t = t + WORKGROUP_SIZE) {
             let r = order_at(lv, t);
-            e[lv.vec_base + r] = vec4<f32>(smooth_row(lv, r), 0.0);
+            let v = smooth_row(lv, r);
+            if (cache) {
+                e_cache[3u * r] = v.x;
+                e_cache[3u * r + 1u] = v.y;
+                e_cache[3u * r + 2u] = v.z;
+            } else {
+                e[lv.vec_base + r] = vec4<f32>(v, 0.0);
+            }
         }
-        storageBarrier();
+        if (cache) {
+            workgroupBarrier();
+        } else {
+            storageBarrier();
+        }
+    }
+    if (cache) {
+        cached = false;
+        for (var r = lid; r < lv.rows; r = r + WORKGROUP_SIZE) {
+            let at = 3u * r;
+            e[lv.vec_base + r] = vec4<f32>(e_cache[at], e_cache[at + 1u], e_cache[at + 2u], 0.0);
+        }
+        // No invocation refills the copy for the next operation before all have read it.
+        workgroupBarrier();
     }
 }
 

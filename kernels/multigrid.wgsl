@@ -14,9 +14,24 @@
 // on software adapters; src/gpu/array_layout.rs chooses it with the arrays' layout).
 override BLOCKS_IN_FLIGHT: u32 = 1u;
 
+// Levels of at most this many rows keep their correction in workgroup memory while
+// coarse_cycle smooths them (pipeline-overridable; 0: never, the default of every other kernel).
+override CACHE_ROWS: u32 = 0u;
+// The correction of the level being smoothed, three floats a row, while `cached` is set.
+var<workgroup> e_cache: array<f32, 3u * CACHE_ROWS + 3u>;
+var<private> cached: bool = false;
+
+// Row c's correction on level lv: from workgroup memory while the level is cached.
+fn correction(lv: Level, c: u32) -> vec3<f32> {
+    if (CACHE_ROWS > 0u && cached) {
+        return vec3<f32>(e_cache[3u * c], e_cache[3u * c + 1u], e_cache[3u * c + 2u]);
+    }
+    return e[lv.vec_base + c].xyz;
+}
+
 // Block b's product with its column's correction (b: the level's own block index).
 fn block_product(lv: Level, b: u32) -> vec3<f32> {
-    return block_at(lv.block_base + b) * e[lv.vec_base + block_column(lv, b)].xyz;
+    return block_at(lv.block_base + b) * correction(lv, block_column(lv, b));
 }
 
 // `sum` − Σ_b A_b·e_column(b) over a row's blocks first .. end, subtracted one after another in

@@ -54,8 +54,11 @@ fn tshirt_with(mut scene: Scene) -> (Prepared, ParticleState, SubstepParams) {
 fn parity_solve_stages_tshirt() {
     let Some(ctx) = gpu() else { return };
     let (prep, state, step) = tshirt();
+    // Every level in one workgroup, those of up to 1,024 rows smoothed in workgroup memory
+    // (the coarse levels; how GPUs run them).
     let single = SolveOptions {
         small_rows: u32::MAX,
+        cached_rows: 1024,
     };
     let g = GpuSolver::with_options(ctx, &prep.model, prep.params, &prep.plan, 1, single);
     check_stages("tshirt", g.unwrap(), Case::new(prep, state, step));
@@ -65,7 +68,10 @@ fn parity_solve_stages_tshirt() {
 fn parity_solve_stages_pinched() {
     let Some(ctx) = gpu() else { return };
     let (prep, state, step) = common::pinched();
-    let apart = SolveOptions { small_rows: 0 };
+    let apart = SolveOptions {
+        small_rows: 0,
+        cached_rows: 0,
+    };
     let g = GpuSolver::with_options(ctx, &prep.model, prep.params, &prep.plan, 1, apart);
     check_stages("pinched", g.unwrap(), Case::new(prep, state, step));
 }
@@ -86,6 +92,7 @@ fn parity_solve_stages_buckling_tshirt() {
     );
     let single = SolveOptions {
         small_rows: u32::MAX,
+        cached_rows: 0,
     };
     let g = GpuSolver::with_options(ctx, &prep.model, prep.params, &prep.plan, 1, single);
     check_stages("buckling tshirt", g.unwrap(), Case::new(prep, state, step));
@@ -102,6 +109,7 @@ fn parity_solve_stages_membrane_tshirt() {
     assert!(!prep.model.membranes.is_empty() && !prep.model.seams.is_empty());
     let single = SolveOptions {
         small_rows: u32::MAX,
+        cached_rows: 1024,
     };
     let g = GpuSolver::with_options(ctx, &prep.model, prep.params, &prep.plan, 1, single);
     check_stages("membrane tshirt", g.unwrap(), Case::new(prep, state, step));
@@ -124,6 +132,7 @@ fn parity_solve_stages_membrane_buckling_tshirt() {
     );
     let single = SolveOptions {
         small_rows: u32::MAX,
+        cached_rows: 0,
     };
     let g = GpuSolver::with_options(ctx, &prep.model, prep.params, &prep.plan, 1, single);
     check_stages(
@@ -140,7 +149,10 @@ fn parity_solve_stages_membrane_pinched() {
     let Some(ctx) = gpu() else { return };
     let (prep, state, step) = common::pinched_with(common::MEMBRANE_GRAIN_30);
     assert!(!prep.model.membranes.is_empty() && prep.params.num_bodies == 2);
-    let apart = SolveOptions { small_rows: 0 };
+    let apart = SolveOptions {
+        small_rows: 0,
+        cached_rows: 0,
+    };
     let g = GpuSolver::with_options(ctx, &prep.model, prep.params, &prep.plan, 1, apart);
     check_stages("membrane pinched", g.unwrap(), Case::new(prep, state, step));
 }

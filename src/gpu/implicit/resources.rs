@@ -203,6 +203,8 @@ pub(super) struct Resources<'a> {
     pub(super) pos: &'a [TexelArray; 2],
     /// Where the arrays live, which also sets the multigrid kernels' loads in flight.
     pub(super) layout: ArrayLayout,
+    /// `SolveOptions::cached_rows`.
+    pub(super) cached_rows: u32,
 }
 
 impl<'a> Resources<'a> {
@@ -279,14 +281,24 @@ impl<'a> Resources<'a> {
         let label = kernel.file();
         let (layout, groups) = numbered_bind_groups(device, label, [&l0[..], &l1[..]]);
         let source = bind_as_buffers(kernel.compose(energies).source, &[(0, &l0)]);
-        let in_flight = [("BLOCKS_IN_FLIGHT", self.layout.blocks_in_flight() as f64)];
-        let constants = match kernel.includes().contains(&Include::Multigrid) {
-            true => &in_flight[..],
-            false => &[],
-        };
+        let constants = self.constants(kernel);
         let entry = kernel.entry();
-        let pipeline = compute_pipeline(device, label, source, entry, &[&layout], constants);
+        let pipeline = compute_pipeline(device, label, source, entry, &[&layout], &constants);
         KernelPipeline { pipeline, groups }
+    }
+}
+
+impl Resources<'_> {
+    /// The pipeline-overridable constants of `kernel` (multigrid.wgsl's).
+    fn constants(&self, kernel: SolveKernel) -> Vec<(&'static str, f64)> {
+        let mut constants = Vec::new();
+        if kernel.includes().contains(&Include::Multigrid) {
+            constants.push(("BLOCKS_IN_FLIGHT", self.layout.blocks_in_flight() as f64));
+        }
+        if kernel == SolveKernel::CoarseCycle {
+            constants.push(("CACHE_ROWS", self.cached_rows as f64));
+        }
+        constants
     }
 }
 
