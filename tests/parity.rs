@@ -369,9 +369,28 @@ fn trajectory_parity_of(mut scene: Scene, integrator: u32) {
         Ok(())
     })
     .unwrap();
-    frame_by_frame(&prep, &mut gpu, &cpu_frames);
+    let name = format!(
+        "{} sheet{}, integrator {integrator}",
+        if prep.model.membranes.is_empty() {
+            "spring"
+        } else {
+            "membrane"
+        },
+        if prep.params.buckled_fraction > 0.0 {
+            " that buckles"
+        } else {
+            ""
+        },
+    );
+    frame_by_frame(&name, &prep, &mut gpu, &cpu_frames);
     if !on_fallback() {
-        // Whole runs part after a fold on a hardware GPU; frame_by_frame checked every frame.
+        // Whole runs part after a fold on a hardware GPU (frame_by_frame checked every frame);
+        // the GPU's own run must still stay finite.
+        let finite = |s: &ParticleState| s.positions.iter().all(|p| p.is_finite());
+        assert!(
+            gpu_frames.iter().all(finite),
+            "{name}: the GPU's run is not finite"
+        );
         return;
     }
     let mut worst = (0.0f32, 0usize);
@@ -406,13 +425,19 @@ fn trajectory_parity_of(mut scene: Scene, integrator: u32) {
 /// a·b + c into an FMA and gives division and `inverseSqrt` 2.5 ULP, so a position may differ by
 /// `ROUNDINGS` roundings a substep (a position update is a handful of such operations deep).
 /// Within a frame such differences add up, or grow where the sheet is buckling. The yardstick
-/// for both is the CPU itself: the same frame again from the same state with noise of half a
-/// rounding of every position coordinate (up to 2^-24 of its size) added after each substep.
+/// for both is the CPU itself: the same frame again from the same state with noise of up to one
+/// rounding of every position coordinate (2^-24 of its size) added after each substep.
 /// The GPU's frame must end within 2·ROUNDINGS times the noisy frame's distance from the CPU's
 /// (2× for the randomness of one noisy run), or within ROUNDINGS roundings of a 1.5 m position
 /// (2^-24 · 1.5 ≈ 9e-8 m) a substep added up over the frame, whichever is larger.
-fn frame_by_frame(prep: &Prepared, gpu: &mut GpuSolver, cpu_frames: &[ParticleState]) {
+fn frame_by_frame(name: &str, prep: &Prepared, gpu: &mut GpuSolver, cpu_frames: &[ParticleState]) {
     const ROUNDINGS: f32 = 4.0;
+    // A frame restarted from a state is the frame of the run only while nothing changes between
+    // frames (gravity switched on, attachments let go).
+    assert!(
+        prep.gravity.1 == 0 && prep.attached.is_empty(),
+        "{name}: phases"
+    );
     let mut noisy = CpuSolver::new(&prep.model, prep.params, &prep.plan);
     let mut rng = common::Rng::new(11);
     let linear = prep.substeps as f32 * 9e-8;
@@ -434,11 +459,11 @@ fn frame_by_frame(prep: &Prepared, gpu: &mut GpuSolver, cpu_frames: &[ParticleSt
         }
         let spread = max_abs_diff(&noisy.state().unwrap().positions, cpu);
         let bound = ROUNDINGS * (2.0 * spread).max(linear);
-        eprintln!("frame {frame}: GPU {apart:.2e} m from the CPU, noisy CPU {spread:.2e} m");
+        eprintln!("{name} frame {frame}: GPU {apart:.2e} m from the CPU, noisy CPU {spread:.2e} m");
         assert!(
             apart <= bound,
-            "frame {frame}: one frame from the CPU's state ends {apart} m from the CPU, bound \
-             {bound} m (noisy CPU {spread} m)"
+            "{name} frame {frame}: one frame from the CPU's state ends {apart} m from the CPU, \
+             bound {bound} m (noisy CPU {spread} m)"
         );
     }
 }

@@ -64,6 +64,32 @@ fn parity_solve_stages_tshirt() {
     check_stages("tshirt", g.unwrap(), Case::new(prep, state, step));
 }
 
+/// The T-shirt's whole substep, every level in one workgroup, with its coarse levels smoothed in
+/// workgroup memory and without: the same bits. The stage checks above run one operation a
+/// dispatch; here a V-cycle's operations hand the cached correction on within one dispatch
+/// (copied in, swept, copied back before the residual, restriction and prolongation read it).
+#[test]
+fn workgroup_memory_changes_no_bit_of_a_substep() {
+    let Some(ctx) = gpu() else { return };
+    let (prep, state, step) = tshirt();
+    let substep = |cached_rows| {
+        let options = SolveOptions {
+            small_rows: u32::MAX,
+            cached_rows,
+        };
+        let plan = &prep.plan;
+        let mut g = GpuSolver::with_options(ctx, &prep.model, prep.params, plan, 1, options);
+        let g = g.as_mut().unwrap();
+        g.set_state(&state);
+        g.advance(&[step]).unwrap();
+        g.state().unwrap()
+    };
+    let (plain, cached) = (substep(0), substep(1024));
+    assert!(plain.positions != state.positions, "nothing moved");
+    assert_eq!(plain.positions, cached.positions);
+    assert_eq!(plain.velocities, cached.velocities);
+}
+
 #[test]
 fn parity_solve_stages_pinched() {
     let Some(ctx) = gpu() else { return };

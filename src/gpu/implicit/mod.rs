@@ -39,7 +39,8 @@ pub struct SolveOptions {
     /// many rows run back to back in one single-workgroup dispatch (`coarse_cycle`) instead of
     /// one dispatch per colour or operation.
     pub small_rows: u32,
-    /// `coarse_cycle` smooths levels of at most this many rows in workgroup memory (0: none).
+    /// `coarse_cycle` smooths levels of at most this many rows in workgroup memory (0: none;
+    /// at most what the device's workgroup memory holds, 12 bytes a row).
     pub cached_rows: u32,
 }
 
@@ -174,7 +175,9 @@ impl ImplicitSolve {
             substeps: shared.substeps,
             pos: shared.pos,
             layout: ctx.layout,
-            cached_rows: options.cached_rows,
+            // Three floats a row, and three spare (the array's size when nothing is cached).
+            cached_rows: (options.cached_rows)
+                .min((device.limits().max_compute_workgroup_storage_size / 12).saturating_sub(1)),
         };
         let pipelines = resources.pipelines(device, &kernels, energies);
         let mut solve = ImplicitSolve {
