@@ -25,10 +25,7 @@ fn smooth_level(l: u32, backward: bool, lid: u32) {
     let cache = CACHE_ROWS > 0u && lv.rows <= CACHE_ROWS;
     if (cache) {
         for (var r = lid; r < lv.rows; r = r + WORKGROUP_SIZE) {
-            let v = e[lv.vec_base + r];
-            e_cache[3u * r] = v.x;
-            e_cache[3u * r + 1u] = v.y;
-            e_cache[3u * r + 2u] = v.z;
+            cache_store(r, e[lv.vec_base + r].xyz);
         }
         workgroupBarrier();
         cached = true;
@@ -43,9 +40,7 @@ fn smooth_level(l: u32, backward: bool, lid: u32) {
             let r = order_at(lv, t);
             let v = smooth_row(lv, r);
             if (cache) {
-                e_cache[3u * r] = v.x;
-                e_cache[3u * r + 1u] = v.y;
-                e_cache[3u * r + 2u] = v.z;
+                cache_store(r, v);
             } else {
                 e[lv.vec_base + r] = vec4<f32>(v, 0.0);
             }
@@ -59,8 +54,7 @@ fn smooth_level(l: u32, backward: bool, lid: u32) {
     if (cache) {
         cached = false;
         for (var r = lid; r < lv.rows; r = r + WORKGROUP_SIZE) {
-            let at = 3u * r;
-            e[lv.vec_base + r] = vec4<f32>(e_cache[at], e_cache[at + 1u], e_cache[at + 2u], 0.0);
+            e[lv.vec_base + r] = vec4<f32>(cache_load(r), 0.0);
         }
         // No invocation refills the copy for the next operation before all have read it.
         workgroupBarrier();

@@ -10,8 +10,9 @@
 @group(0) @binding(25) var<storage, read_write> e: array<vec4<f32>>;
 @group(0) @binding(26) var<storage, read_write> res: array<vec4<f32>>;
 
-// How many of a row's blocks an invocation loads at once (pipeline-overridable: 4 on GPUs, 1
-// on software adapters; src/gpu/array_layout.rs chooses it with the arrays' layout).
+// How many of a row's blocks an invocation loads at once (pipeline-overridable: 4 with the
+// storage-buffer layout, GPUs' default; 1 with textures, software adapters' default; see
+// ArrayLayout::blocks_in_flight in src/gpu/array_layout.rs).
 override BLOCKS_IN_FLIGHT: u32 = 1u;
 
 // Levels of at most this many rows keep their correction in workgroup memory while
@@ -21,10 +22,21 @@ override CACHE_ROWS: u32 = 0u;
 var<workgroup> e_cache: array<f32, 3u * CACHE_ROWS + 3u>;
 var<private> cached: bool = false;
 
+// Row r of the cached correction.
+fn cache_load(r: u32) -> vec3<f32> {
+    return vec3<f32>(e_cache[3u * r], e_cache[3u * r + 1u], e_cache[3u * r + 2u]);
+}
+
+fn cache_store(r: u32, v: vec3<f32>) {
+    e_cache[3u * r] = v.x;
+    e_cache[3u * r + 1u] = v.y;
+    e_cache[3u * r + 2u] = v.z;
+}
+
 // Row c's correction on level lv: from workgroup memory while the level is cached.
 fn correction(lv: Level, c: u32) -> vec3<f32> {
     if (CACHE_ROWS > 0u && cached) {
-        return vec3<f32>(e_cache[3u * c], e_cache[3u * c + 1u], e_cache[3u * c + 2u]);
+        return cache_load(c);
     }
     return e[lv.vec_base + c].xyz;
 }

@@ -286,9 +286,7 @@ impl<'a> Resources<'a> {
         let pipeline = compute_pipeline(device, label, source, entry, &[&layout], &constants);
         KernelPipeline { pipeline, groups }
     }
-}
 
-impl Resources<'_> {
     /// The pipeline-overridable constants of `kernel` (multigrid.wgsl's).
     fn constants(&self, kernel: SolveKernel) -> Vec<(&'static str, f64)> {
         let mut constants = Vec::new();
