@@ -6,20 +6,21 @@ mod common;
 
 use drapekit::bench::fabric::CSV_COLUMNS;
 
+/// `drapekit bench fabric --quick ARGS --out OUT`, which must succeed: its CSV's header and rows.
+fn quick_run(
+    out: &std::path::Path,
+    args: &[&str],
+) -> (Vec<String>, Vec<std::collections::HashMap<String, String>>) {
+    let out_arg = ["--out", out.to_str().unwrap()];
+    let r = common::drapekit(&[&["bench", "fabric", "--quick"], args, &out_arg].concat());
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    common::read_csv(&out.join("fabric.csv"), "sweeps_per_substep")
+}
+
 #[test]
 fn bench_fabric_quick_writes_both_tests_for_silk() {
     let out = common::out_dir("bench-fabric", "quick");
-    let r = common::drapekit(&[
-        "bench",
-        "fabric",
-        "--quick",
-        "--presets",
-        "silk",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let (header, rows) = common::read_csv(&out.join("fabric.csv"), "sweeps_per_substep");
+    let (header, rows) = quick_run(&out, &["--presets", "silk"]);
     assert_eq!(header, CSV_COLUMNS);
     assert_eq!(rows.len(), 2);
     let (cusick, cantilever) = (&rows[0], &rows[1]);
@@ -62,21 +63,17 @@ fn bench_fabric_quick_writes_both_tests_for_silk() {
 #[test]
 fn bench_fabric_membrane_cuts_warp_weft_and_bias_and_reports_the_residual() {
     let out = common::out_dir("bench-fabric", "membrane");
-    let r = common::drapekit(&[
-        "bench",
-        "fabric",
-        "--quick",
-        "--presets",
-        "cotton",
-        "--integrator",
-        "implicit",
-        "--fabric-model",
-        "membrane",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let (_, rows) = common::read_csv(&out.join("fabric.csv"), "sweeps_per_substep");
+    let (_, rows) = quick_run(
+        &out,
+        &[
+            "--presets",
+            "cotton",
+            "--integrator",
+            "implicit",
+            "--fabric-model",
+            "membrane",
+        ],
+    );
     let tests: Vec<&str> = rows.iter().map(|r| r["test"].as_str()).collect();
     assert_eq!(
         tests,
@@ -138,27 +135,23 @@ fn bench_fabric_membrane_cuts_warp_weft_and_bias_and_reports_the_residual() {
 #[test]
 fn a_tolerance_ends_solves_early_and_the_spacing_is_the_one_asked_for() {
     let out = common::out_dir("bench-fabric", "tolerance");
-    let r = common::drapekit(&[
-        "bench",
-        "fabric",
-        "--quick",
-        "--presets",
-        "cotton",
-        "--tests",
-        "cusick",
-        "--cusick-spacing-mm",
-        "20",
-        "--integrator",
-        "implicit",
-        "--iterations",
-        "4",
-        "--tolerance",
-        "0.05",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let (_, rows) = common::read_csv(&out.join("fabric.csv"), "sweeps_per_substep");
+    let (_, rows) = quick_run(
+        &out,
+        &[
+            "--presets",
+            "cotton",
+            "--tests",
+            "cusick",
+            "--cusick-spacing-mm",
+            "20",
+            "--integrator",
+            "implicit",
+            "--iterations",
+            "4",
+            "--tolerance",
+            "0.05",
+        ],
+    );
     assert_eq!(rows.len(), 1, "only the Cusick test was asked for");
     assert_eq!(rows[0]["test"], "cusick");
     assert_eq!(common::finite(&rows[0], "spacing_m"), 0.02);
@@ -299,25 +292,21 @@ fn buckling_drapes_leather_further_with_springs_and_with_the_membrane() {
             "bench-fabric",
             &format!("compression-{model}-{compression}"),
         );
-        let o = out.to_str().unwrap();
-        let r = common::drapekit(&[
-            "bench",
-            "fabric",
-            "--quick",
-            "--presets",
-            "leather",
-            "--tests",
-            "cusick",
-            "--integrator",
-            "implicit",
-            "--fabric-model",
-            model,
-            "--compression",
-            compression,
-            "--out",
-            o,
-        ]);
-        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let (_, rows) = quick_run(
+            &out,
+            &[
+                "--presets",
+                "leather",
+                "--tests",
+                "cusick",
+                "--integrator",
+                "implicit",
+                "--fabric-model",
+                model,
+                "--compression",
+                compression,
+            ],
+        );
         let scene =
             std::fs::read_to_string(out.join("specimens/cusick-leather/scene.toml")).unwrap();
         let md = std::fs::read_to_string(out.join("fabric.md")).unwrap();
@@ -328,7 +317,6 @@ fn buckling_drapes_leather_further_with_springs_and_with_the_membrane() {
             "{scene}"
         );
         assert_eq!(md.contains("cloth that buckles"), buckles, "{md}");
-        let (_, rows) = common::read_csv(&out.join("fabric.csv"), "sweeps_per_substep");
         common::finite(&rows[0], "simulated")
     };
     // Leather is stiff in plane (5.8e4 N/m) for its bending: linear springs or membrane hold
@@ -351,23 +339,19 @@ fn a_denim_membrane_bends_its_warp_and_weft_strips_by_their_own_rigidity() {
     // (the full run: 0.972); one rigidity every way would give them about the same G (a ratio
     // of about 0.66 here), and the law's sign turned about 0.44.
     let out = common::out_dir("bench-fabric", "denim-membrane");
-    let r = common::drapekit(&[
-        "bench",
-        "fabric",
-        "--quick",
-        "--presets",
-        "denim",
-        "--tests",
-        "cantilever",
-        "--integrator",
-        "implicit",
-        "--fabric-model",
-        "membrane",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let (_, rows) = common::read_csv(&out.join("fabric.csv"), "sweeps_per_substep");
+    let (_, rows) = quick_run(
+        &out,
+        &[
+            "--presets",
+            "denim",
+            "--tests",
+            "cantilever",
+            "--integrator",
+            "implicit",
+            "--fabric-model",
+            "membrane",
+        ],
+    );
     let value = |k: usize, key: &str| common::finite(&rows[k], key);
     assert_eq!(rows[1]["test"], "cantilever_weft");
     let ratio = (value(0, "simulated") / value(1, "simulated"))
