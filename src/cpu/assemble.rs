@@ -47,8 +47,12 @@ pub fn assemble(
                 row[0] = sys.hessian;
             }
             for (k, block) in row.iter_mut().enumerate().skip(1) {
-                let j = pattern.columns[start as usize + k] as usize;
-                *block = si * *block * filters[j];
+                let sj = filters[pattern.columns[start as usize + k] as usize];
+                // Most rows meet no body: I·H·I is H (up to the sign of a zero), so it is
+                // skipped, as in the kernel.
+                if si != Mat3::IDENTITY || sj != Mat3::IDENTITY {
+                    *block = si * *block * sj;
+                }
             }
             *f = (si * sys.force).extend(0.0);
         });

@@ -8,10 +8,10 @@ use super::contact_planes::contact_planes;
 use super::force_residual::{force_residual, reduce_residual};
 use super::implicit_terms::{Implicit, VbdElements, PLANE_BLOCKS};
 use super::line_energy::{apply_correction, line_energy, line_search};
-use super::pcg::{pcg_direction, pcg_matvec, pcg_start, pcg_step, PcgScalars};
+use super::pcg::{pcg_direction, pcg_start, pcg_step, pcg_step_length, PcgScalars};
 use super::prolong::{correction_filter, prolong};
 use super::restrict::restrict;
-use super::smooth::{block_jacobi, level_residual, smooth, ColourRows};
+use super::smooth::{block_jacobi, smooth, ColourRows};
 use super::vbd_solve::{vbd_solve, SweepPlan};
 use crate::model::layout::{
     Hinge, Membrane, Seam, SimParams, SpringRef, SubstepParams, WORKGROUP_SIZE,
@@ -28,6 +28,9 @@ pub struct Elements {
     hinges: Option<(Vec<Hinge>, Csr<u32>)>,
     seams: Option<(Vec<Seam>, Csr<u32>)>,
     membranes: Option<(Vec<Membrane>, Csr<u32>)>,
+    /// Each vertex's row when the lists run in a sweep's order (`in_order`); `None` in
+    /// particle order.
+    rows: Option<Vec<u32>>,
 }
 
 impl Elements {
@@ -47,12 +50,42 @@ impl Elements {
             membranes: membrane.then(|| by_ref(&model.membranes, model.membrane_csr())),
             hinges: (!model.hinges.is_empty()).then(|| by_ref(&model.hinges, model.hinge_csr())),
             seams: (!model.seams.is_empty()).then(|| by_ref(&model.seams, model.seam_csr())),
+            rows: None,
+        }
+    }
+
+    /// The same elements with each vertex's lists side by side in the order `order` (a
+    /// permutation of the particles) visits the vertices. A sweep visits a colour's vertices
+    /// across the whole cloth: in particle order, every vertex's springs, hinges and seams
+    /// begin with a cache miss on a large mesh; in the sweep's order they are one stream. The
+    /// same elements in the same order per vertex, so the same numbers.
+    pub fn in_order(&self, order: &[u32]) -> Elements {
+        assert!(self.rows.is_none(), "the lists are in particle order");
+        let mut rows = vec![u32::MAX; order.len()];
+        for (r, &i) in order.iter().enumerate() {
+            rows[i as usize] = r as u32;
+        }
+        assert!(
+            rows.len() + 1 == self.springs.offsets.len() && !rows.contains(&u32::MAX),
+            "the order lists every particle once"
+        );
+        let springs = permuted_positions(&self.springs.offsets, order);
+        Elements {
+            springs: Csr {
+                items: pick(&self.springs.items, &springs.items),
+                offsets: springs.offsets,
+            },
+            hinges: self.hinges.as_ref().map(|l| refs_in_order(l, order)),
+            seams: self.seams.as_ref().map(|l| refs_in_order(l, order)),
+            membranes: self.membranes.as_ref().map(|l| refs_in_order(l, order)),
+            rows: Some(rows),
         }
     }
 
     /// Borrowed as the stages take them (`VbdElements`).
     pub fn view(&self) -> VbdElements<'_> {
         VbdElements {
+            rows: self.rows.as_deref(),
             springs: (&self.springs.offsets, &self.springs.items),
             hinges: self
                 .hinges
@@ -81,6 +114,36 @@ fn by_ref<T: Copy>(elements: &[T], csr: Csr<u32>) -> (Vec<T>, Csr<u32>) {
         .map(|&r| elements[(r / 4) as usize])
         .collect();
     (copies, csr)
+}
+
+/// `by_ref`'s copies and refs, each vertex's side by side in `order`.
+fn refs_in_order<T: Copy>((copies, csr): &(Vec<T>, Csr<u32>), order: &[u32]) -> (Vec<T>, Csr<u32>) {
+    let positions = permuted_positions(&csr.offsets, order);
+    let refs = Csr {
+        items: pick(&csr.items, &positions.items),
+        offsets: positions.offsets,
+    };
+    (pick(copies, &positions.items), refs)
+}
+
+/// The entries of `items` at `positions`.
+fn pick<T: Copy>(items: &[T], positions: &[u32]) -> Vec<T> {
+    positions.iter().map(|&k| items[k as usize]).collect()
+}
+
+/// The positions of a per-vertex list with `offsets`, vertex after vertex in `order`: the
+/// new list's offsets and, for each of its entries, the entry's position in the old list.
+fn permuted_positions(offsets: &[u32], order: &[u32]) -> Csr<u32> {
+    let mut new = Csr {
+        offsets: vec![0],
+        items: Vec::with_capacity(*offsets.last().unwrap_or(&0) as usize),
+    };
+    for &i in order {
+        new.items
+            .extend(offsets[i as usize]..offsets[i as usize + 1]);
+        new.offsets.push(new.items.len() as u32);
+    }
+    new
 }
 
 /// One level's arrays of the Newton step's linear system (level 0: the fine level).
@@ -142,6 +205,8 @@ pub struct Newton {
 /// Vertex Block Descent: the elements, the colour order and sweeps, and the solve's arrays.
 pub struct Vbd {
     elements: Arc<Elements>,
+    /// The same, each vertex's lists in the sweep's order (`Elements::in_order`).
+    sweep_elements: Arc<Elements>,
     /// The vertices and colours of a sweep.
     pub sweep: SweepPlan,
     /// The substep's operations.
@@ -218,6 +283,7 @@ impl Vbd {
             "the vertex colouring leaves an element with two vertices of one colour"
         );
         Vbd {
+            sweep_elements: Arc::new(elements.in_order(&coloring.order)),
             elements,
             sweep: SweepPlan::new(coloring.order, &coloring.offsets, n),
             schedule,
@@ -268,8 +334,8 @@ impl Vbd {
         prev: &[Vec4],
         sdfs: &[&[f32]],
     ) {
-        let elements = self.elements.clone();
-        let el = elements.view();
+        let (elements, sweep_elements) = (self.elements.clone(), self.sweep_elements.clone());
+        let el = (elements.view(), sweep_elements.view());
         let mut swept = self.history.last().map_or(0, |h| h.0);
         for &op in ops {
             let started = self.profile.is_some().then(std::time::Instant::now);
@@ -294,7 +360,7 @@ impl Vbd {
         step: &SubstepParams,
         prev: &[Vec4],
         sdfs: &[&[f32]],
-        el: &VbdElements,
+        (el, sweep_el): &(VbdElements, VbdElements),
         swept: &mut u32,
     ) {
         {
@@ -323,6 +389,7 @@ impl Vbd {
             match op {
                 SolveOp::Sweep { iteration } => {
                     let (x, steps, next) = (&mut self.x, &mut self.steps, &mut self.next);
+                    let s = Implicit { el: sweep_el, ..s };
                     vbd_solve(&s, (&self.sweep, iteration), x, steps, next);
                     self.iterations_run.0 += 1;
                     *swept += 1;
@@ -354,7 +421,6 @@ impl Newton {
     fn run(&mut self, op: SolveOp, s: &Implicit, x: &mut [Vec4]) {
         let mg = &*self.structure;
         let level = |l: u32| &mg.levels[l as usize - 1];
-        let pattern = |l: u32| if l == 0 { &mg.fine } else { &level(l).pattern };
         match op {
             SolveOp::Assemble => {
                 let l0 = &mut self.levels[0];
@@ -393,7 +459,7 @@ impl Newton {
             }
             SolveOp::Residual { level: l } => {
                 let a = &mut self.levels[l as usize];
-                level_residual(pattern(l), &a.blocks, &a.rhs, &a.e, &mut a.res);
+                a.by_colour.residual(&a.rhs, &a.e, &mut a.res);
             }
             SolveOp::Restrict { to } => {
                 let (finer, coarse) = self.levels.split_at_mut(to as usize);
@@ -420,14 +486,8 @@ impl Newton {
                 pcg_direction(first, &l0.rhs, &l0.e, &mut self.p, &mut self.scalars);
             }
             SolveOp::PcgMatVec => {
-                let l0 = &self.levels[0];
-                pcg_matvec(
-                    &mg.fine,
-                    &l0.blocks,
-                    &self.p,
-                    &mut self.ap,
-                    &mut self.scalars,
-                );
+                self.levels[0].by_colour.product(&self.p, &mut self.ap);
+                pcg_step_length(&self.p, &self.ap, &mut self.scalars);
             }
             SolveOp::PcgStep => {
                 let l0 = &mut self.levels[0];
@@ -480,6 +540,76 @@ mod tests {
                 assert_eq!(vertices(&copies[k])[(r % 4) as usize] as usize, i);
             }
         }
+    }
+
+    /// Vertex `i`'s entries in list `(offsets, items)` of `el`.
+    fn entries<'a, T>(el: &VbdElements, (offsets, items): (&[u32], &'a [T]), i: usize) -> &'a [T] {
+        &items[el.span(offsets, i)]
+    }
+
+    #[test]
+    fn lists_in_a_sweep_order_hold_each_vertex_s_elements_in_particle_order_s_order() {
+        // A sweep reads the lists in its own order (`Elements::in_order`); every vertex must find
+        // there the entries it has in particle order, in the same order, for the same numbers.
+        let mesh = TriMesh::grid(1.0, 1.0, 6, 5, Vec3::ZERO, GridPlane::Xy);
+        let membrane = Orthotropic {
+            warp: 100.0,
+            weft: 50.0,
+            shear: 5.0,
+            bending: None,
+        };
+        for model in [None, Some(membrane)].map(|m| ClothModel::from_mesh(&mesh, &fabric(m), &[])) {
+            let order = model.vertex_coloring().order;
+            assert!(
+                order.windows(2).any(|w| w[0] > w[1]),
+                "a sweep order, not particle order"
+            );
+            let (by_particle, by_sweep) = (
+                Elements::new(&model),
+                Elements::new(&model).in_order(&order),
+            );
+            let (a, b) = (by_particle.view(), by_sweep.view());
+            for i in 0..model.len() {
+                assert_eq!(
+                    entries(&a, a.springs, i),
+                    entries(&b, b.springs, i),
+                    "springs of {i}"
+                );
+                let (ha, hb) = (a.hinges.unwrap(), b.hinges.unwrap());
+                assert_eq!(
+                    entries(&a, (ha.0, ha.1), i),
+                    entries(&b, (hb.0, hb.1), i),
+                    "hinge refs of {i}"
+                );
+                assert_eq!(
+                    entries(&a, (ha.0, ha.2), i),
+                    entries(&b, (hb.0, hb.2), i),
+                    "hinges of {i}"
+                );
+                if let (Some(ma), Some(mb)) = (a.membranes, b.membranes) {
+                    assert_eq!(
+                        entries(&a, (ma.0, ma.1), i),
+                        entries(&b, (mb.0, mb.1), i),
+                        "membrane refs of {i}"
+                    );
+                    assert_eq!(
+                        entries(&a, (ma.0, ma.2), i),
+                        entries(&b, (mb.0, mb.2), i),
+                        "membranes of {i}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "lists every particle once")]
+    fn a_sweep_order_that_leaves_out_a_particle_is_refused() {
+        let mesh = TriMesh::grid(1.0, 1.0, 3, 3, Vec3::ZERO, GridPlane::Xy);
+        let model = ClothModel::from_mesh(&mesh, &fabric(None), &[]);
+        let mut order: Vec<u32> = (0..model.len() as u32).collect();
+        order[1] = 0;
+        Elements::new(&model).in_order(&order);
     }
 
     #[test]

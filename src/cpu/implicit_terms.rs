@@ -55,6 +55,10 @@ pub const PLANE_BLOCKS: usize = 2;
 
 /// The elements a vertex gathers over, as CSR lists (the same arrays the force stages use).
 pub struct VbdElements<'a> {
+    /// Where each vertex's entries are in the lists below: `None` when the lists run in
+    /// particle order (vertex i's entries are `offsets[i]..offsets[i + 1]`), `Some(rows)` when
+    /// they run in a sweep's order (vertex i's are row `rows[i]`'s).
+    pub rows: Option<&'a [u32]>,
     /// Spring offsets per particle and incident springs.
     pub springs: (&'a [u32], &'a [SpringRef]),
     /// Hinge offsets, hinge refs (index · 4 + role) and each ref's hinge (at the ref's
@@ -77,32 +81,34 @@ impl VbdElements<'_> {
         for i in 0..colour.len() {
             let mut meets = |j: u32| apart &= j as usize == i || colour[j as usize] != colour[i];
             let (offsets, springs) = self.springs;
-            springs[incident(offsets, i)]
+            springs[self.span(offsets, i)]
                 .iter()
                 .for_each(|s| meets(s.other));
             if let Some((offsets, _, hinges)) = self.hinges {
-                for hinge in &hinges[incident(offsets, i)] {
+                for hinge in &hinges[self.span(offsets, i)] {
                     hinge.v.iter().for_each(|&j| meets(j));
                 }
             }
             if let Some((offsets, _, seams)) = self.seams {
-                for s in &seams[incident(offsets, i)] {
+                for s in &seams[self.span(offsets, i)] {
                     s.v[..3].iter().for_each(|&j| meets(j));
                 }
             }
             if let Some((offsets, _, membranes)) = self.membranes {
-                for m in &membranes[incident(offsets, i)] {
+                for m in &membranes[self.span(offsets, i)] {
                     m.v[..3].iter().for_each(|&j| meets(j));
                 }
             }
         }
         apart
     }
-}
 
-/// The entries of vertex `i` in a per-vertex list with `offsets`.
-fn incident(offsets: &[u32], i: usize) -> std::ops::Range<usize> {
-    offsets[i] as usize..offsets[i + 1] as usize
+    /// The entries of vertex `i` in one of the per-vertex lists, whose offsets are `offsets`.
+    #[inline]
+    pub fn span(&self, offsets: &[u32], i: usize) -> std::ops::Range<usize> {
+        let row = self.rows.map_or(i, |rows| rows[i] as usize);
+        offsets[row] as usize..offsets[row + 1] as usize
+    }
 }
 
 /// What every implicit stage reads: the step, the state at its start, the elements and the
@@ -213,6 +219,7 @@ impl Implicit<'_> {
     }
 
     /// The frame of hinge `hinge` at displacements `d` (world positions xₙ + D).
+    #[inline(always)]
     fn hinge_frame(&self, hinge: &Hinge, d: &[Vec4]) -> Option<HingeFrame> {
         let x = |v: u32| Vec3A::from(v3(self.prev[v as usize]) + v3(d[v as usize]));
         HingeFrame::at(hinge.v.map(x), hinge.stiffness)
@@ -226,18 +233,18 @@ impl Implicit<'_> {
         let mass = 1.0 / self.prev[i].w;
         let mut sum = mass / (h * h) + self.params.air_damping * mass / h;
         let (offsets, springs) = self.el.springs;
-        for s in &springs[offsets[i] as usize..offsets[i + 1] as usize] {
+        for s in &springs[self.el.span(offsets, i)] {
             sum += (s.stiffness + s.damping / h) / 3.0;
         }
         if let Some((offsets, refs, seams)) = self.el.seams {
-            let range = offsets[i] as usize..offsets[i + 1] as usize;
+            let range = self.el.span(offsets, i);
             for (&r, s) in refs[range.clone()].iter().zip(&seams[range]) {
                 let share = seam_share(s, r % 4);
                 sum += share * share * (s.stiffness + s.damping / h);
             }
         }
         if let Some((offsets, refs, membranes)) = self.el.membranes {
-            let range = offsets[i] as usize..offsets[i + 1] as usize;
+            let range = self.el.span(offsets, i);
             for (&r, m) in refs[range.clone()].iter().zip(&membranes[range]) {
                 sum += MembraneStep::constant_stiffness(m, (r % 4) as usize, h);
             }
@@ -253,8 +260,9 @@ impl Implicit<'_> {
     }
 
     /// Vertex `i`'s force and Hessian diagonal block at displacements `d` (a pinned vertex's
-    /// are zero). With `blocks`, each off-diagonal block of the vertex's Hessian row goes to
-    /// `sink` (block index, value); blocks towards pinned vertices are left out.
+    /// are zero). With `blocks` (whose numbering needs the lists in particle order), each
+    /// off-diagonal block of the vertex's Hessian row goes to `sink` (block index, value);
+    /// blocks towards pinned vertices are left out.
     pub fn vertex_system(
         &self,
         i: usize,
@@ -262,6 +270,10 @@ impl Implicit<'_> {
         blocks: Option<&ElementBlocks>,
         sink: &mut impl FnMut(u32, Mat3),
     ) -> VertexSystem {
+        assert!(
+            blocks.is_none() || self.el.rows.is_none(),
+            "element blocks are numbered in particle order"
+        );
         let p = self.params;
         let h = p.dt;
         let inv_mass = self.prev[i].w;
@@ -280,8 +292,8 @@ impl Implicit<'_> {
         let mut hess = Mat3::from_diagonal(Vec3::splat(inertia + air));
 
         let (offsets, springs) = self.el.springs;
-        for k in offsets[i]..offsets[i + 1] {
-            let s = springs[k as usize];
+        for k in self.el.span(offsets, i) {
+            let s = springs[k];
             let j = s.other as usize;
             let start = v3(self.prev[i]) - v3(self.prev[j]);
             let change = di - v3(d[j]);
@@ -304,14 +316,14 @@ impl Implicit<'_> {
             }
             hess += block;
             if let Some(b) = blocks.filter(|_| free(j)) {
-                sink(b.springs[k as usize], -block);
+                sink(b.springs[k], -block);
             }
         }
 
         if let Some((offsets, refs, hinges)) = self.el.hinges {
-            for k in offsets[i]..offsets[i + 1] {
-                let r = refs[k as usize];
-                let hinge = &hinges[k as usize];
+            for k in self.el.span(offsets, i) {
+                let r = refs[k];
+                let hinge = &hinges[k];
                 let Some(t) = self.hinge_frame(hinge, d) else {
                     continue;
                 };
@@ -325,7 +337,7 @@ impl Implicit<'_> {
                     for other in (0..4).filter(|&o| o != role) {
                         if free(hinge.v[other as usize] as usize) {
                             let block = c * outer(u, t.direction(other));
-                            sink(b.hinges[k as usize][other as usize], block);
+                            sink(b.hinges[k][other as usize], block);
                         }
                     }
                 }
@@ -333,9 +345,9 @@ impl Implicit<'_> {
         }
 
         if let Some((offsets, refs, membranes)) = self.el.membranes {
-            for k in offsets[i]..offsets[i + 1] {
-                let r = refs[k as usize];
-                let m = &membranes[k as usize];
+            for k in self.el.span(offsets, i) {
+                let r = refs[k];
+                let m = &membranes[k];
                 let role = (r % 4) as usize;
                 let (fm, mb) = MembraneStep::at(m, self.prev, d).system(p, m, role, h);
                 f += fm;
@@ -343,7 +355,7 @@ impl Implicit<'_> {
                 if let Some(b) = blocks {
                     for other in (0..3).filter(|&o| o != role) {
                         if free(m.v[other] as usize) {
-                            sink(b.membranes[k as usize][other], mb[other]);
+                            sink(b.membranes[k][other], mb[other]);
                         }
                     }
                 }
@@ -351,9 +363,9 @@ impl Implicit<'_> {
         }
 
         if let Some((offsets, refs, seams)) = self.el.seams {
-            for k in offsets[i]..offsets[i + 1] {
-                let r = refs[k as usize];
-                let s = &seams[k as usize];
+            for k in self.el.span(offsets, i) {
+                let r = refs[k];
+                let s = &seams[k];
                 let (fa, ha) = self.seam_system(s, d);
                 let share = seam_share(s, r % 4);
                 f += share * fa;
@@ -362,7 +374,7 @@ impl Implicit<'_> {
                     for other in (0..3).filter(|&o| o != r % 4) {
                         let (j, share_j) = (s.v[other as usize], seam_share(s, other));
                         if free(j as usize) && share_j != 0.0 {
-                            sink(b.seams[k as usize][other as usize], (share * share_j) * ha);
+                            sink(b.seams[k][other as usize], (share * share_j) * ha);
                         }
                     }
                 }
@@ -422,7 +434,7 @@ impl Implicit<'_> {
         }
 
         let (offsets, springs) = self.el.springs;
-        for s in &springs[offsets[i] as usize..offsets[i + 1] as usize] {
+        for s in &springs[self.el.span(offsets, i)] {
             let j = s.other as usize;
             if j < i {
                 continue;
@@ -457,7 +469,7 @@ impl Implicit<'_> {
         }
 
         if let Some((offsets, refs, hinges)) = self.el.hinges {
-            let range = offsets[i] as usize..offsets[i + 1] as usize;
+            let range = self.el.span(offsets, i);
             for (&r, hinge) in refs[range.clone()].iter().zip(&hinges[range]) {
                 if r % 4 != 0 {
                     continue;
@@ -470,7 +482,7 @@ impl Implicit<'_> {
         }
 
         if let Some((offsets, refs, membranes)) = self.el.membranes {
-            let range = offsets[i] as usize..offsets[i + 1] as usize;
+            let range = self.el.span(offsets, i);
             for (&r, m) in refs[range.clone()].iter().zip(&membranes[range]) {
                 if r % 4 != 0 {
                     continue;
@@ -487,7 +499,7 @@ impl Implicit<'_> {
         }
 
         if let Some((offsets, refs, seams)) = self.el.seams {
-            let range = offsets[i] as usize..offsets[i + 1] as usize;
+            let range = self.el.span(offsets, i);
             for (&r, s) in refs[range.clone()].iter().zip(&seams[range]) {
                 if r % 4 != 0 {
                     continue;

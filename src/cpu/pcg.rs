@@ -5,7 +5,7 @@
 
 use super::grain;
 use super::line_energy::tree_sum;
-use super::smooth::block_times;
+use super::smooth::row_product;
 use crate::model::layout::WORKGROUP_SIZE;
 use crate::model::multigrid::BlockPattern;
 use glam::{Mat3, Vec4};
@@ -74,13 +74,15 @@ pub fn pcg_matvec(
     (ap.par_iter_mut().with_min_len(grain::ROW))
         .enumerate()
         .for_each(|(i, out)| {
-            let (start, end) = (pattern.offsets[i] as usize, pattern.offsets[i + 1] as usize);
-            let mut sum = glam::Vec3A::ZERO;
-            for b in start..end {
-                sum += block_times(blocks[b], p[pattern.columns[b] as usize]);
-            }
-            *out = sum.extend(0.0);
+            let row = pattern.offsets[i] as usize..pattern.offsets[i + 1] as usize;
+            *out = row_product(&blocks[row.clone()], &pattern.columns[row], p);
         });
+    pcg_step_length(p, ap, s);
+}
+
+/// The step length α = (r·z)/(p·H·p) from p and H·p (0 when p·H·p is not positive: the
+/// direction has vanished).
+pub fn pcg_step_length(p: &[Vec4], ap: &[Vec4], s: &mut PcgScalars) {
     let pap = dot(p, ap);
     s.alpha = if pap > 0.0 { s.rz / pap } else { 0.0 };
 }

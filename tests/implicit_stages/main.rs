@@ -702,30 +702,35 @@ fn line_energy_bound(c: &Case, correction: &[Vec4]) -> f32 {
     let all = c.elements.view();
     let zeros = vec![0u32; n + 1];
     let none = VbdElements {
+        rows: None,
         springs: (&zeros, &[]),
         hinges: None,
         seams: None,
         membranes: None,
     };
     let springs = VbdElements {
+        rows: None,
         springs: all.springs,
         hinges: None,
         seams: None,
         membranes: None,
     };
     let hinges = VbdElements {
+        rows: None,
         springs: (&zeros, &[]),
         hinges: all.hinges,
         seams: None,
         membranes: None,
     };
     let seams = VbdElements {
+        rows: None,
         springs: (&zeros, &[]),
         hinges: None,
         seams: all.seams,
         membranes: None,
     };
     let membranes = VbdElements {
+        rows: None,
         springs: (&zeros, &[]),
         hinges: None,
         seams: None,
