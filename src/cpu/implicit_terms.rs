@@ -56,9 +56,9 @@ pub const PLANE_BLOCKS: usize = 2;
 /// The elements a vertex gathers over, as CSR lists (the same arrays the force stages use).
 pub struct VbdElements<'a> {
     /// Where each vertex's entries are in the lists below: `None` when the lists run in
-    /// particle order (vertex i's entries are `offsets[i]..offsets[i + 1]`), `Some(rows)` when
-    /// they run in a sweep's order (vertex i's are row `rows[i]`'s).
-    pub rows: Option<&'a [u32]>,
+    /// particle order (vertex i's entries are `offsets[i]..offsets[i + 1]`), `Some(row_of)`
+    /// when they run in a sweep's order (vertex i's are those of the sweep's row `row_of[i]`).
+    pub row_of: Option<&'a [u32]>,
     /// Spring offsets per particle and incident springs.
     pub springs: (&'a [u32], &'a [SpringRef]),
     /// Hinge offsets, hinge refs (index · 4 + role) and each ref's hinge (at the ref's
@@ -106,7 +106,7 @@ impl VbdElements<'_> {
     /// The entries of vertex `i` in one of the per-vertex lists, whose offsets are `offsets`.
     #[inline]
     pub fn span(&self, offsets: &[u32], i: usize) -> std::ops::Range<usize> {
-        let row = self.rows.map_or(i, |rows| rows[i] as usize);
+        let row = self.row_of.map_or(i, |row_of| row_of[i] as usize);
         offsets[row] as usize..offsets[row + 1] as usize
     }
 }
@@ -271,7 +271,7 @@ impl Implicit<'_> {
         sink: &mut impl FnMut(u32, Mat3),
     ) -> VertexSystem {
         assert!(
-            blocks.is_none() || self.el.rows.is_none(),
+            blocks.is_none() || self.el.row_of.is_none(),
             "element blocks are numbered in particle order"
         );
         let p = self.params;

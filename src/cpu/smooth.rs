@@ -37,13 +37,20 @@ impl ColourRows {
     /// The copy's structure for the level of block pattern `pattern`, whose particles `order`
     /// lists colour after colour, colour k from `colour_offsets[k]`.
     ///
-    /// Panics unless `order` lists every row once, each row's first block is its diagonal, and
+    /// Panics unless `order` lists every row once in colours that cover it, each row's first
+    /// block is its diagonal, and
     /// no row has a block in a column of its own colour: what lets `smooth` update a colour's
     /// rows at once, in place, on any number of threads.
     pub fn new(pattern: &BlockPattern, order: &[u32], colour_offsets: &[u32]) -> ColourRows {
         let rows = pattern.offsets.len() - 1;
         let colour = colour_of_each(order, colour_offsets, rows);
+        // With the colours covering all of `order`, `colour_of_each` has checked that it names
+        // each row once: what lets `residual` and `product` write each row's particle at once.
         assert_eq!(order.len(), rows, "every row is listed once");
+        assert!(
+            colour_offsets.first() == Some(&0) && colour_offsets.last() == Some(&(rows as u32)),
+            "the colours cover every row"
+        );
         for r in 0..rows {
             let blocks =
                 &pattern.columns[pattern.offsets[r] as usize..pattern.offsets[r + 1] as usize];
@@ -249,6 +256,13 @@ mod tests {
         // threads.
         let n = 4 * grain::ROW + 1;
         let (pattern, blocks, rhs) = chain(n);
+        // Every entry of every block its own, so that a block read transposed or from the
+        // mirrored row shows.
+        let blocks: Vec<Mat3> = (blocks.iter().enumerate())
+            .map(|(k, b)| {
+                *b + Mat3::from_cols_array(&std::array::from_fn(|e| (k * 9 + e) as f32 / 64.0))
+            })
+            .collect();
         let order: Vec<u32> = (0..2).flat_map(|c| (c..n as u32).step_by(2)).collect();
         let mut rows = ColourRows::new(&pattern, &order, &[0, n.div_ceil(2) as u32, n as u32]);
         rows.fill(&blocks);

@@ -551,6 +551,22 @@ fn check_sweep(g: &mut GpuSolver, c: &mut Case) {
     let (mut steps, mut next) = ([0.0f32], Vec::new());
     let plan = cpu::SweepPlan::new(coloring.order.clone(), &coloring.offsets, x.len());
     c.with(|s| cpu::vbd_solve(s, (&plan, 0), &mut x, &mut steps, &mut next));
+    // The solver's sweeps read the element lists laid out in their own order
+    // (`Elements::in_order`): the same elements in the same order per vertex, so the same bits.
+    let in_sweep_order = c.elements.in_order(&coloring.order);
+    let mut x_in_order = c.x.clone();
+    c.with_elements(Some(&in_sweep_order.view()), |s| {
+        cpu::vbd_solve(s, (&plan, 0), &mut x_in_order, &mut steps, &mut next)
+    });
+    let bits = |v: &[Vec4]| -> Vec<u32> {
+        v.iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits))
+            .collect()
+    };
+    assert!(
+        bits(&x_in_order) == bits(&x),
+        "a sweep over the lists in the sweep's order"
+    );
     g.run_solve_ops(&[SolveOp::Sweep { iteration: 0 }], &c.step)
         .unwrap();
     let moved = max_abs_diff(&x, &c.x);
@@ -702,35 +718,35 @@ fn line_energy_bound(c: &Case, correction: &[Vec4]) -> f32 {
     let all = c.elements.view();
     let zeros = vec![0u32; n + 1];
     let none = VbdElements {
-        rows: None,
+        row_of: None,
         springs: (&zeros, &[]),
         hinges: None,
         seams: None,
         membranes: None,
     };
     let springs = VbdElements {
-        rows: None,
+        row_of: None,
         springs: all.springs,
         hinges: None,
         seams: None,
         membranes: None,
     };
     let hinges = VbdElements {
-        rows: None,
+        row_of: None,
         springs: (&zeros, &[]),
         hinges: all.hinges,
         seams: None,
         membranes: None,
     };
     let seams = VbdElements {
-        rows: None,
+        row_of: None,
         springs: (&zeros, &[]),
         hinges: None,
         seams: all.seams,
         membranes: None,
     };
     let membranes = VbdElements {
-        rows: None,
+        row_of: None,
         springs: (&zeros, &[]),
         hinges: None,
         seams: None,
