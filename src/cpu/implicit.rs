@@ -569,11 +569,8 @@ mod tests {
         lists
     }
 
-    #[test]
-    fn lists_in_a_sweep_order_hold_each_vertex_s_elements_in_particle_order_s_order() {
-        // A sweep reads the lists in its own order (`Elements::in_order`); every vertex must find
-        // there the entries it has in particle order, in the same order, for the same numbers.
-        // (A sewn garment's seam pairs: `tests/implicit_stages`, which sweeps both ways.)
+    /// A 6×5 grid as springs and as a membrane (both bend).
+    fn grid_models() -> [ClothModel; 2] {
         let mesh = TriMesh::grid(1.0, 1.0, 6, 5, Vec3::ZERO, GridPlane::Xy);
         let membrane = Orthotropic {
             warp: 100.0,
@@ -581,7 +578,15 @@ mod tests {
             shear: 5.0,
             bending: None,
         };
-        for model in [None, Some(membrane)].map(|m| ClothModel::from_mesh(&mesh, &fabric(m), &[])) {
+        [None, Some(membrane)].map(|m| ClothModel::from_mesh(&mesh, &fabric(m), &[]))
+    }
+
+    #[test]
+    fn lists_in_a_sweep_order_hold_each_vertex_s_elements_in_particle_order_s_order() {
+        // A sweep reads the lists in its own order (`Elements::in_order`); every vertex must find
+        // there the entries it has in particle order, in the same order, for the same numbers.
+        // (A sewn garment's seam pairs: `tests/implicit_stages`, which sweeps both ways.)
+        for model in grid_models() {
             let order = model.vertex_coloring().order;
             assert!(
                 order.windows(2).any(|w| w[0] > w[1]),
@@ -610,14 +615,7 @@ mod tests {
 
     #[test]
     fn each_ref_holds_the_element_it_names_and_the_vertex_at_its_role() {
-        let mesh = TriMesh::grid(1.0, 1.0, 6, 5, Vec3::ZERO, GridPlane::Xy);
-        let membrane = Orthotropic {
-            warp: 100.0,
-            weft: 50.0,
-            shear: 5.0,
-            bending: None,
-        };
-        for model in [None, Some(membrane)].map(|m| ClothModel::from_mesh(&mesh, &fabric(m), &[])) {
+        for model in grid_models() {
             let elements = Elements::new(&model);
             let el = elements.view();
             let hinges = el.hinges.expect("the grid bends");
