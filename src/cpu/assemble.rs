@@ -40,7 +40,8 @@ pub fn assemble(
                 row[(b - start) as usize] += m;
             });
             let si = filters[i];
-            if si != Mat3::IDENTITY {
+            let touching = si != Mat3::IDENTITY;
+            if touching {
                 let fixed = s.contact_stiffness(i) / CONTACT_RATIO;
                 row[0] = si * sys.hessian * si + fixed * (Mat3::IDENTITY - si);
             } else {
@@ -50,7 +51,7 @@ pub fn assemble(
                 let sj = filters[pattern.columns[start as usize + k] as usize];
                 // Most rows meet no body: I·H·I is H (up to the sign of a zero), so it is
                 // skipped, as in the kernel.
-                if si != Mat3::IDENTITY || sj != Mat3::IDENTITY {
+                if touching || sj != Mat3::IDENTITY {
                     *block = si * *block * sj;
                 }
             }

@@ -227,6 +227,14 @@ pub fn row_product(blocks: &[Mat3], columns: &[u32], v: &[Vec4]) -> Vec4 {
 mod tests {
     use super::*;
 
+    /// Every component's bits, for comparing vectors to the bit.
+    fn bits(v: &[Vec4]) -> Vec<u32> {
+        v.iter()
+            .flat_map(|x| x.to_array())
+            .map(f32::to_bits)
+            .collect()
+    }
+
     /// A chain of `n` particles, each coupled to its two neighbours: rows alternate between two
     /// colours, and the blocks are diagonally dominant with varied entries.
     fn chain(n: usize) -> (BlockPattern, Vec<Mat3>, Vec<Vec4>) {
@@ -269,12 +277,6 @@ mod tests {
         let e: Vec<Vec4> = (0..n)
             .map(|i| Vec4::new(0.3, -(i as f32), 0.01 * i as f32, 0.0))
             .collect();
-        let bits = |v: &[Vec4]| -> Vec<u32> {
-            v.iter()
-                .flat_map(|x| x.to_array())
-                .map(f32::to_bits)
-                .collect()
-        };
         let (mut want, mut got) = (vec![Vec4::ZERO; n], vec![Vec4::NAN; n]);
         level_residual(&pattern, &blocks, &rhs, &e, &mut want);
         rows.residual(&rhs, &e, &mut got);
@@ -333,12 +335,6 @@ mod tests {
                     smooth(&rows, rows.forward(), &rhs, &mut e);
                 }
             });
-            let bits = |v: &[Vec4]| -> Vec<u32> {
-                v.iter()
-                    .flat_map(|x| x.to_array())
-                    .map(f32::to_bits)
-                    .collect()
-            };
             assert_eq!(bits(&e), bits(&reference), "{threads} threads");
         }
     }
