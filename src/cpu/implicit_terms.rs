@@ -414,10 +414,16 @@ impl Implicit<'_> {
     /// seam pair at its first vertex), so that every element counts once. Each change is
     /// computed as a difference of nearby quantities (d·Δ and |Δ|², not G(x + αc) − G(x)), so
     /// it keeps its own precision however large G is.
-    pub fn energy_change(&self, i: usize, d: &[Vec4], c: &[Vec4], alphas: [f32; 3]) -> [f32; 3] {
+    pub fn energy_change<const N: usize>(
+        &self,
+        i: usize,
+        d: &[Vec4],
+        c: &[Vec4],
+        alphas: [f32; N],
+    ) -> [f32; N] {
         let p = self.params;
         let h = p.dt;
-        let mut out = [0.0f32; 3];
+        let mut out = [0.0f32; N];
         let di = v3(d[i]);
         let ci = v3(c[i]);
         if self.prev[i].w != 0.0 {
@@ -525,7 +531,14 @@ impl Implicit<'_> {
     }
 
     /// Contact and friction's share of `energy_change` at free vertex `i`.
-    fn contact_change(&self, i: usize, di: Vec3, ci: Vec3, alphas: [f32; 3], out: &mut [f32; 3]) {
+    fn contact_change<const N: usize>(
+        &self,
+        i: usize,
+        di: Vec3,
+        ci: Vec3,
+        alphas: [f32; N],
+        out: &mut [f32; N],
+    ) {
         let p = self.params;
         if p.num_bodies == 0 {
             return;

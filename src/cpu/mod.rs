@@ -64,7 +64,9 @@ pub use implicit_terms::{
     hinge_psi, Implicit, VbdElements, VertexSystem, CONTACT_RATIO, PLANE_BLOCKS,
 };
 pub use integrate::{integrate, HingeGather};
-pub use line_energy::{apply_correction, line_energy, line_search, tree_sum, LINE_ALPHAS};
+pub use line_energy::{
+    apply_correction, line_energy, line_search, line_search_from_full_step, tree_sum, LINE_ALPHAS,
+};
 pub use monitor::monitor;
 pub use pcg::{dot, pcg_direction, pcg_matvec, pcg_start, pcg_step, PcgScalars};
 pub use prolong::{correction_filter, prolong};

@@ -689,6 +689,7 @@ fn check_line_search(g: &mut GpuSolver, c: &mut Case, correction: &mut [Vec4]) {
         "  line_search: α = {alpha} on both (ΔG {:?})",
         total(&partials)
     );
+    same_step_from_full_step(c, correction);
 
     // D += α·c with α = ½ (whatever the search chose): a rounding of |D| + |α·c|, FMA or not.
     let half = SolveScalars {
@@ -705,6 +706,38 @@ fn check_line_search(g: &mut GpuSolver, c: &mut Case, correction: &mut [Vec4]) {
     assert!(max_abs_diff(&x, &c.x) > 0.0, "the correction moved nothing");
     c.x = x;
     g.set_solve_array(SolveArray::Displacement, &c.x).unwrap();
+}
+
+/// The CPU solve's line search, which sums the shorter steps' changes only when the full step
+/// raises G, chooses the step that the search over all three partials chooses, from the same
+/// partials to the bit where it summed them: along the correction, and along 64 times it, whose
+/// full step (and its half and quarter) overshoot the minimum along it, so that the shorter
+/// steps are summed too.
+fn same_step_from_full_step(c: &Case, correction: &[Vec4]) {
+    for scale in [1.0f32, 64.0] {
+        let along: Vec<Vec4> = correction.iter().map(|v| *v * scale).collect();
+        let mut all = vec![Vec4::ZERO; c.x.len().div_ceil(64)];
+        c.with(|s| cpu::line_energy(s, &c.x, &along, &mut all));
+        let mut lazy = vec![Vec4::ZERO; all.len()];
+        let alpha = c.with(|s| cpu::line_search_from_full_step(s, &c.x, &along, &mut lazy));
+        assert_eq!(alpha, cpu::line_search(&all), "the step along {scale}·c");
+        let summed = if alpha == cpu::LINE_ALPHAS[0] { 1 } else { 3 };
+        for (a, b) in all.iter().zip(&lazy) {
+            for k in 0..summed {
+                assert_eq!(
+                    a[k].to_bits(),
+                    b[k].to_bits(),
+                    "partial {k} along {scale}·c"
+                );
+            }
+        }
+        if scale > 1.0 {
+            assert!(
+                alpha < 1.0,
+                "the full step along {scale}·c does not raise G"
+            );
+        }
+    }
 }
 
 /// The scale of the terms the line energy sums: per vertex, the magnitude of the change of its
