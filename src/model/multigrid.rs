@@ -12,6 +12,7 @@ use super::coloring::greedy_coloring;
 use super::{ClothModel, Csr};
 use crate::mesh::Charted;
 use crate::pattern::transfer::Transfer;
+use rayon::slice::ParallelSliceMut;
 
 /// Where a block-sparse matrix keeps its 3×3 blocks: row i's are `offsets[i]..offsets[i + 1]`,
 /// the first the diagonal, then the row's other columns in increasing order.
@@ -28,7 +29,7 @@ impl BlockPattern {
     fn from_pairs(rows: usize, pairs: &mut Vec<(u32, u32)>) -> BlockPattern {
         pairs.extend((0..rows as u32).map(|i| (i, i)));
         // The diagonal sorts first in its row.
-        pairs.sort_unstable_by_key(|&(i, j)| (i, j != i, j));
+        pairs.par_sort_unstable_by_key(|&(i, j)| (i, j != i, j));
         pairs.dedup();
         let mut offsets = vec![0u32; rows + 1];
         for &(i, _) in pairs.iter() {
@@ -279,7 +280,7 @@ fn coarse_level(len: usize, finer: &BlockPattern, transfer: &Transfer) -> Level 
         .map(|&(ci, cj, b, w)| (pattern.find(ci, cj).expect("in the pattern"), (b, w)))
         .collect();
     // Each coarse block sums its terms in finer-block order, the same on every backend.
-    galerkin_pairs.sort_by_key(|&(c, (b, _))| (c, b));
+    galerkin_pairs.par_sort_by_key(|&(c, (b, _))| (c, b));
     let galerkin = Csr::from_pairs(pattern.blocks(), &galerkin_pairs);
     let (order, color_offsets) = greedy_coloring(len, &pattern.offsets, &pattern.columns);
     Level {
