@@ -37,7 +37,11 @@ fn sheet(fabric: Orthotropic, grain: f32) -> ClothModel {
         buckling: false,
     };
     let mut model = ClothModel::from_mesh(&mesh, &fabric, &[]);
-    model.set_grain(&world_grain(mesh.triangles.len(), grain, Vec3::Z), &fabric);
+    model.set_grain(
+        &world_grain(mesh.triangles.len(), grain, Vec3::Z),
+        &fabric,
+        &[],
+    );
     model
 }
 

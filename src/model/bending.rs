@@ -40,9 +40,17 @@ pub const WEAKEST_FOLD: f32 = 0.01;
 
 /// Sets each hinge of `model` whose first three vertices form one of its triangles to the
 /// coefficient its edge takes from `strips` (`hinge_coefficient`), the warp of that triangle
-/// the membrane's (`membrane::warp_in_plane` of its `grain`). The rest weight, linear in the coefficient, follows. Hinges across
-/// seams rest on their first panel's triangle, so they are set alike.
-pub fn set_by_direction(model: &mut ClothModel, grain: &[Vec3], strips: [f32; 2]) {
+/// the membrane's (`membrane::warp_in_plane` of its `grain`). The rest weight, linear in the
+/// coefficient, follows. A hinge across a seam (`seam_sides`: its index and the other panel's
+/// sewn edge, which with its fourth vertex makes the other panel's triangle) takes the mean of
+/// its two panels' coefficients, each by its own edge and grain: its curvature's energy is
+/// spread over both triangles (of one spacing), each bending as its panel does.
+pub fn set_by_direction(
+    model: &mut ClothModel,
+    grain: &[Vec3],
+    strips: [f32; 2],
+    seam_sides: &[(usize, [u32; 2])],
+) {
     let key = |v: [u32; 3]| {
         let mut v = v;
         v.sort_unstable();
@@ -51,18 +59,30 @@ pub fn set_by_direction(model: &mut ClothModel, grain: &[Vec3], strips: [f32; 2]
     let triangles: HashMap<[u32; 3], usize> = (model.triangles.iter().enumerate())
         .map(|(t, &tri)| (key(tri), t))
         .collect();
+    let other_edge: HashMap<usize, [u32; 2]> = seam_sides.iter().copied().collect();
     let p = |i: u32| model.positions[i as usize];
-    for h in &mut model.hinges {
-        let Some(&t) = triangles.get(&key([h.v[0], h.v[1], h.v[2]])) else {
-            continue;
-        };
+    // The coefficient of a fold along `edge` of triangle `corners`, by that triangle's grain.
+    let side = |corners: [u32; 3], edge: [u32; 2]| {
+        let &t = triangles.get(&key(corners))?;
         let [x0, x1, x2] = model.triangles[t].map(p);
-        let warp = super::membrane::warp_in_plane(x0, x1, x2, grain[t]);
-        let (Some((_, warp)), Some(edge)) = (warp, (p(h.v[1]) - p(h.v[0])).try_normalize()) else {
+        let (_, warp) = super::membrane::warp_in_plane(x0, x1, x2, grain[t])?;
+        let edge = (p(edge[1]) - p(edge[0])).try_normalize()?;
+        Some(hinge_coefficient(
+            edge.dot(warp).abs().min(1.0).acos(),
+            strips,
+        ))
+    };
+    let coefficients: Vec<Option<f32>> = (model.hinges.iter().enumerate())
+        .map(|(k, h)| {
+            let own = side([h.v[0], h.v[1], h.v[2]], [h.v[0], h.v[1]])?;
+            let other = (other_edge.get(&k)).and_then(|&e| side([e[0], e[1], h.v[3]], e));
+            Some(other.map_or(own, |other| 0.5 * (own + other)))
+        })
+        .collect();
+    for (h, k) in model.hinges.iter_mut().zip(coefficients) {
+        let Some(k) = k else {
             continue;
         };
-        let angle = edge.dot(warp).abs().min(1.0).acos();
-        let k = hinge_coefficient(angle, strips);
         if h.stiffness > 0.0 {
             h.rest_weight *= k / h.stiffness;
         }
@@ -114,5 +134,55 @@ mod tests {
         }
         // Past a ratio of 5 the weak fold keeps 1% of the mean, never less.
         assert_eq!(hinge_coefficient(0.0, [6.0, 1.0]), WEAKEST_FOLD * 3.5);
+    }
+
+    #[test]
+    fn a_hinge_across_a_seam_bends_by_both_panels_grain() {
+        // Two panels apart in the plane z = 0, each a triangle on an edge along x: panel A
+        // (0, 1, 2) with its warp along x, panel B (3, 4, 5) with its warp along y. Hinge 0
+        // crosses the seam sewing A's edge 0→1 to B's 3→4; hinge 1 is the same hinge with no
+        // seam side given, as a hinge inside panel A is set.
+        let v = |x: f32, y: f32| Vec3::new(x, y, 0.0);
+        let mut model = ClothModel {
+            positions: vec![v(0.0, 0.0), v(1.0, 0.0), v(0.5, 1.0)]
+                .into_iter()
+                .chain([v(3.0, 0.0), v(4.0, 0.0), v(3.5, -1.0)])
+                .collect(),
+            triangles: vec![[0, 1, 2], [3, 4, 5]],
+            ..Default::default()
+        };
+        let hinge = crate::model::layout::Hinge {
+            v: [0, 1, 2, 5],
+            stiffness: 1.0,
+            rest_weight: 3.0,
+            ..Default::default()
+        };
+        model.hinges = vec![hinge, hinge];
+        let strips = [4.0f32, 1.0];
+        set_by_direction(&mut model, &[Vec3::X, Vec3::Y], strips, &[(0, [3, 4])]);
+        // A's edge runs along its warp (θ = 0), B's across its warp (θ = 90°).
+        let (along, across) = (
+            hinge_coefficient(0.0, strips),
+            hinge_coefficient(FRAC_PI_2, strips),
+        );
+        assert!(
+            across > 10.0 * along,
+            "the two sides differ: {along} {across}"
+        );
+        let [seam, inside] = [&model.hinges[0], &model.hinges[1]];
+        // The mean of two coefficients of a few ulps each: 1e-6 relative is ample.
+        let mean = 0.5 * (along + across);
+        assert!(
+            (seam.stiffness - mean).abs() < 1e-6 * mean,
+            "{} against {mean}",
+            seam.stiffness
+        );
+        assert!(
+            (inside.stiffness - along).abs() < 1e-6 * along,
+            "{} against {along}",
+            inside.stiffness
+        );
+        // The rest weight follows the coefficient.
+        assert!((seam.rest_weight - 3.0 * seam.stiffness).abs() < 1e-5 * seam.rest_weight);
     }
 }

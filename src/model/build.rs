@@ -240,6 +240,8 @@ impl Scene {
             let collider = build_collider(b, &self.checker(), &self.body_table(i))?;
             model.colliders.push(std::sync::Arc::new(collider));
         }
+        // Each seam hinge's index and the other panel's sewn edge: it bends by both panels' grain.
+        let mut seam_sides = Vec::new();
         if let (
             Some(g),
             ClothSource::Pattern {
@@ -270,6 +272,10 @@ impl Scene {
             // panels lie apart until sewn, so the rest weight takes the first panel's triangle
             // for both sides (the mesh spacing is the same on both).
             if let Some(kb) = self.fabric.bending_stiffness {
+                let first = model.hinges.len();
+                seam_sides.extend(
+                    (g.seam_hinges.iter().enumerate()).map(|(k, h)| (first + k, h.other_edge)),
+                );
                 model.hinges.extend(g.seam_hinges.iter().map(|h| {
                     let p = |i: u32| model.positions[i as usize];
                     let [x3, x4, x1] = [h.v[0], h.v[1], h.v[2]].map(p);
@@ -315,7 +321,7 @@ impl Scene {
         }
         // After the seams' hinges, which bend by direction too.
         if let Some(grain) = grain {
-            model.set_grain(&grain, &self.fabric);
+            model.set_grain(&grain, &self.fabric, &seam_sides);
         }
         model.multigrid = self
             .build_multigrid(&model, garment.as_ref())

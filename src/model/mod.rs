@@ -306,8 +306,14 @@ impl ClothModel {
 
     /// Lays the membrane's warp along `grain` (one direction per triangle of `triangles`),
     /// rebuilding it for `fabric` and, where the fabric bends by direction, setting each hinge's
-    /// bending by its edge's angle to the grain (nothing without a membrane).
-    pub fn set_grain(&mut self, grain: &[Vec3], fabric: &crate::scene::Fabric) {
+    /// bending by its edge's angle to the grain (nothing without a membrane). `seam_sides`:
+    /// each hinge across a seam (its index) and the edge of the other panel sewn to its own.
+    pub fn set_grain(
+        &mut self,
+        grain: &[Vec3],
+        fabric: &crate::scene::Fabric,
+        seam_sides: &[(usize, [u32; 2])],
+    ) {
         if let Some(m) = &fabric.membrane {
             self.membranes = membrane::build_membranes(
                 &self.positions,
@@ -318,7 +324,7 @@ impl ClothModel {
                 fabric.damping_ratio,
             );
             if let Some(strips) = m.bending {
-                bending::set_by_direction(self, grain, strips);
+                bending::set_by_direction(self, grain, strips, seam_sides);
             }
         }
     }

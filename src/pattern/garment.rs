@@ -46,6 +46,9 @@ pub struct SeamPair {
 pub struct SeamHinge {
     /// Shared edge (first panel) and the two opposite vertices.
     pub v: [u32; 4],
+    /// The edge on the other panel that the first panel's is sewn to: with `v[3]`, the other
+    /// panel's boundary triangle.
+    pub other_edge: [u32; 2],
     /// Which stitch of the pattern.
     pub stitch: u32,
 }
@@ -279,6 +282,7 @@ impl Garment {
                 if let Some(v) = hinge {
                     seam_hinges.push(SeamHinge {
                         v,
+                        other_edge: [b0, b1],
                         stitch: k as u32,
                     });
                 }
