@@ -298,9 +298,12 @@ pub enum SolveOp {
     PcgStep,
     /// The Newton correction: c masked at pins and filtered at contacts (`correction_filter`).
     CorrectionFilter,
-    /// The change of G along c at each trial step (`line_energy`).
+    /// The change of G along c at each trial step (`line_energy`). The CPU solve also chooses
+    /// the step here (`line_search_from_full_step`, the same step), so that it sums the
+    /// shorter steps only when the full one raises G.
     LineEnergy,
-    /// The step length: the first trial that does not raise G (`line_search`).
+    /// The step length: the first trial that does not raise G (`line_search`; on the CPU,
+    /// chosen by `LineEnergy`).
     LineSearch,
     /// D += α·c (`apply_correction`).
     ApplyCorrection,

@@ -18,10 +18,11 @@ pub fn line_energy(s: &Implicit, d: &[Vec4], c: &[Vec4], partials: &mut [Vec4]) 
 
 /// `line_energy` then `line_search` as the CPU solve runs them: G's change at the full step
 /// first, and at the shorter ones only when the full step raises G. Each step length's change
-/// is computed and summed on its own, so the partials it fills and the step it chooses are
-/// `line_energy`'s and `line_search`'s to the bit, while a full step that is taken (306 Newton
-/// steps of 312 on the 5 mm T-shirt) costs one evaluation of each element at the step instead
-/// of three.
+/// is computed and summed on its own, so the step it chooses is `line_search`'s after
+/// `line_energy` to the bit, as are the partials it sums: the full step's always, the shorter
+/// steps' only when the full step is rejected (else `partials` keeps whatever it held in those
+/// components). A full step that is taken costs one evaluation of each element at the step
+/// instead of three.
 pub fn line_search_from_full_step(
     s: &Implicit,
     d: &[Vec4],

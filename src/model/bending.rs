@@ -44,7 +44,8 @@ pub const WEAKEST_FOLD: f32 = 0.01;
 /// coefficient, follows. A hinge across a seam (`seam_sides`: its index and the other panel's
 /// sewn edge, which with its fourth vertex makes the other panel's triangle) takes the mean of
 /// its two panels' coefficients, each by its own edge and grain: its curvature's energy is
-/// spread over both triangles (of one spacing), each bending as its panel does.
+/// spread over both triangles (of one spacing), each bending as its panel does. A seam hinge
+/// whose other side is no triangle with a warp (a degenerate one) keeps its own side's.
 pub fn set_by_direction(
     model: &mut ClothModel,
     grain: &[Vec3],

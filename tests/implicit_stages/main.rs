@@ -710,15 +710,16 @@ fn check_line_search(g: &mut GpuSolver, c: &mut Case, correction: &mut [Vec4]) {
 
 /// The CPU solve's line search, which sums the shorter steps' changes only when the full step
 /// raises G, chooses the step that the search over all three partials chooses, from the same
-/// partials to the bit where it summed them: along the correction, and along 64 times it, whose
-/// full step (and its half and quarter) overshoot the minimum along it, so that the shorter
-/// steps are summed too.
+/// partials to the bit where it summed them: along the correction, along a sixteenth of it
+/// (a short step down G: the full step is taken) and along 64 times it, whose full step (and
+/// its half and quarter) overshoot the minimum along it, so that the shorter steps are summed
+/// too. The partials start as NaN, as stale values from another step would be.
 fn same_step_from_full_step(c: &Case, correction: &[Vec4]) {
-    for scale in [1.0f32, 64.0] {
+    for scale in [1.0f32, 1.0 / 16.0, 64.0] {
         let along: Vec<Vec4> = correction.iter().map(|v| *v * scale).collect();
         let mut all = vec![Vec4::ZERO; c.x.len().div_ceil(64)];
         c.with(|s| cpu::line_energy(s, &c.x, &along, &mut all));
-        let mut lazy = vec![Vec4::ZERO; all.len()];
+        let mut lazy = vec![Vec4::NAN; all.len()];
         let alpha = c.with(|s| cpu::line_search_from_full_step(s, &c.x, &along, &mut lazy));
         assert_eq!(alpha, cpu::line_search(&all), "the step along {scale}·c");
         let summed = if alpha == cpu::LINE_ALPHAS[0] { 1 } else { 3 };
@@ -736,6 +737,9 @@ fn same_step_from_full_step(c: &Case, correction: &[Vec4]) {
                 alpha < 1.0,
                 "the full step along {scale}·c does not raise G"
             );
+        }
+        if scale < 1.0 {
+            assert_eq!(alpha, 1.0, "the full step along {scale}·c raises G");
         }
     }
 }

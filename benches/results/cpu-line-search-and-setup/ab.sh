@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Alternating A/B of two drapekit builds on the shipped 5 mm T-shirt, whole command, the machine
-# otherwise idle: old = before the CPU line search summed the shorter steps lazily, new = after.
+# otherwise idle (README.md says which builds each log compares).
 # Usage: ab.sh OLD_BINARY NEW_BINARY ROUNDS
 set -euo pipefail
 old=$1 new=$2 rounds=${3:-2}
