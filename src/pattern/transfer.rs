@@ -31,12 +31,7 @@ impl Transfer {
     /// equally close ones.
     pub fn between(source: &Charted, target: &Charted) -> Transfer {
         let target_chart = particle_charts(target);
-        // The source triangles of each chart, with their chart corners.
-        let mut by_chart: Vec<Vec<([u32; 3], [Vec2; 3])>> = vec![Vec::new(); source.charts];
-        for (t, &p) in source.triangles.iter().zip(&source.triangle_chart) {
-            let uv = t.map(|i| source.uv[i as usize]);
-            by_chart[p as usize].push((*t, uv));
-        }
+        let by_chart = chart_triangles(source);
         let grids: Vec<ChartGrid> = by_chart.iter().map(|tris| ChartGrid::new(tris)).collect();
         let everywhere: Vec<&([u32; 3], [Vec2; 3])> = by_chart.iter().flatten().collect();
         let corners: Vec<(([u32; 3], Vec3), f32)> = (0..target.uv.len())
@@ -103,10 +98,8 @@ struct ChartGrid<'a> {
     origin: Vec2,
     cell: f32,
     dims: [usize; 2],
-    /// Cell (x, y)'s triangles, ascending: `entries[offsets[k]..offsets[k + 1]]`,
-    /// k = y·dims[0] + x.
-    offsets: Vec<u32>,
-    entries: Vec<u32>,
+    /// Cell (x, y)'s triangles, ascending: `cells[y·dims[0] + x]`.
+    cells: Vec<Vec<u32>>,
 }
 
 impl<'a> ChartGrid<'a> {
@@ -135,10 +128,8 @@ impl<'a> ChartGrid<'a> {
             origin: lo,
             cell,
             dims,
-            offsets: Vec::new(),
-            entries: Vec::new(),
+            cells: vec![Vec::new(); dims[0] * dims[1]],
         };
-        let mut cells: Vec<Vec<u32>> = vec![Vec::new(); dims[0] * dims[1]];
         // Each box grown by a thousandth of a cell: a point that rounds into a triangle lies
         // an ulp or so outside it at most, and a cell index rounds by less than that margin.
         let margin = Vec2::splat(BOX_MARGIN * cell);
@@ -146,14 +137,9 @@ impl<'a> ChartGrid<'a> {
             let ([x0, y0], [x1, y1]) = (grid.cell_of(*l - margin), grid.cell_of(*h + margin));
             for y in y0..=y1 {
                 for x in x0..=x1 {
-                    cells[y * dims[0] + x].push(t as u32);
+                    grid.cells[y * dims[0] + x].push(t as u32);
                 }
             }
-        }
-        grid.offsets.push(0);
-        for c in cells {
-            grid.entries.extend(c);
-            grid.offsets.push(grid.entries.len() as u32);
         }
         grid
     }
@@ -174,8 +160,7 @@ impl<'a> ChartGrid<'a> {
         let mut best = (usize::MAX, Vec3::X, f32::INFINITY);
         for r in 0..self.dims[0].max(self.dims[1]) {
             for (x, y) in ring(cx, cy, r, self.dims) {
-                let k = y * self.dims[0] + x;
-                for &t in &self.entries[self.offsets[k] as usize..self.offsets[k + 1] as usize] {
+                for &t in &self.cells[y * self.dims[0] + x] {
                     let t = t as usize;
                     let (w, d) = closest_in_triangle(p, &self.triangles[t].1);
                     if d < best.2 || (d == best.2 && t < best.0) {
@@ -213,6 +198,15 @@ fn ring(cx: usize, cy: usize, r: usize, dims: [usize; 2]) -> impl Iterator<Item 
     let inner = (ys.clone()).filter(move |y| y.abs_diff(cy) != r);
     let columns = inner.flat_map(move |y| edge(cx, dims[0]).map(move |x| (x, y)));
     rows.chain(columns)
+}
+
+/// The triangles of each chart, in order, with their chart corners.
+fn chart_triangles(g: &Charted) -> Vec<Vec<([u32; 3], [Vec2; 3])>> {
+    let mut by_chart = vec![Vec::new(); g.charts];
+    for (t, &p) in g.triangles.iter().zip(&g.triangle_chart) {
+        by_chart[p as usize].push((*t, t.map(|i| g.uv[i as usize])));
+    }
+    by_chart
 }
 
 /// Each particle's chart: the chart of any triangle that uses it (`None` for none).
@@ -290,13 +284,8 @@ mod tests {
             *p = turn.rotate(*p);
         }
         let (mut outside, mut on_corners) = (0, 0);
-        for chart in 0..2 {
-            let tris: Vec<([u32; 3], [Vec2; 3])> = (source.triangles.iter())
-                .zip(&source.triangle_chart)
-                .filter(|(_, &c)| c == chart)
-                .map(|(t, _)| (*t, t.map(|i| source.uv[i as usize])))
-                .collect();
-            let grid = ChartGrid::new(&tris);
+        for (chart, tris) in chart_triangles(&source).iter().enumerate() {
+            let grid = ChartGrid::new(tris);
             // A lattice over the chart's box grown by 40% (inside, and outside by up to a few
             // cells), and the source's corners, each in up to six triangles: the first wins.
             let corners = tris.iter().flat_map(|(_, c)| *c);
@@ -329,13 +318,9 @@ mod tests {
             *p = Vec2::from_angle(-0.5).rotate(*p);
         }
         let transfer = Transfer::between(&unturned, &target);
-        let charts = particle_charts(&target);
+        let (charts, by_chart) = (particle_charts(&target), chart_triangles(&unturned));
         for (i, got) in transfer.corners().iter().enumerate() {
-            let chart = charts[i].unwrap();
-            let tris = (unturned.triangles.iter().zip(&unturned.triangle_chart))
-                .filter(|(_, &c)| c == chart)
-                .map(|(t, _)| (*t, t.map(|k| unturned.uv[k as usize])))
-                .collect::<Vec<_>>();
+            let tris = &by_chart[charts[i].unwrap() as usize];
             let (t, w, _) = closest_of(target.uv[i], tris.iter());
             assert_eq!(
                 (t, w.to_array().map(f32::to_bits)),
