@@ -43,6 +43,9 @@ pub struct ConvergenceOptions {
     pub max_newton: u32,
     /// Frames a finer mesh runs from the carried state before its measured substep.
     pub relax_frames: u32,
+    /// Conjugate-gradient iterations in each measured multigrid Newton step (the frames
+    /// before it run the scene's solve, `LINEAR_ITERATIONS`).
+    pub linear_iterations: u32,
 }
 
 /// One point of a method's curve.
@@ -64,6 +67,9 @@ pub struct ConvergenceRow {
     pub residual_max: f32,
     /// Its RMS.
     pub residual_rms: f32,
+    /// Newton steps: how far the step's linear solve got, |r|/|f| (the conjugate-gradient
+    /// residual over the Newton system's right-hand side, the force); `None` for sweeps.
+    pub linear_residual: Option<f32>,
 }
 
 /// Runs the benchmark and writes `convergence.csv`, `convergence.md` and `convergence.svg`.
@@ -245,16 +251,18 @@ fn measure(
         }
         Ok(())
     };
-    let row = |method, iterations, seconds: f64, sweep: f64, r: (f32, f32)| ConvergenceRow {
-        refinement,
-        particles: prep.model.len(),
-        method,
-        iterations,
-        sweep_equivalents: seconds / sweep,
-        seconds,
-        residual_max: r.0,
-        residual_rms: r.1,
-    };
+    let row =
+        |method, iterations, seconds: f64, sweep: f64, r: (f32, f32), linear| ConvergenceRow {
+            refinement,
+            particles: prep.model.len(),
+            method,
+            iterations,
+            sweep_equivalents: seconds / sweep,
+            seconds,
+            residual_max: r.0,
+            residual_rms: r.1,
+            linear_residual: linear,
+        };
     let mut rows = Vec::new();
     // Plain sweeps: the residual after 1, 2, 4, … sweeps of one solve.
     fresh(&mut solver)?;
@@ -276,12 +284,18 @@ fn measure(
     rows.extend(
         curve
             .into_iter()
-            .map(|(k, s, r)| row("vbd", k, s, sweep, r)),
+            .map(|(k, s, r)| row("vbd", k, s, sweep, r, None)),
     );
     // Newton steps, each after its sweeps: preconditioned by the V-cycle, and by the block
     // diagonal alone (the single-level alternative).
     let methods = [
-        ("newton-multigrid", newton_correction(shape)),
+        (
+            "newton-multigrid",
+            newton_correction(SolveShape {
+                linear_iterations: opts.linear_iterations,
+                ..shape
+            }),
+        ),
         (
             "newton-block-jacobi",
             newton_correction_block_jacobi(BLOCK_JACOBI_ITERATIONS),
@@ -294,8 +308,9 @@ fn measure(
         let mut seconds = 0.0;
         for k in 1..=opts.max_newton {
             seconds += run_ops(&mut solver, &correction, &step);
+            let linear = linear_residual(&solver);
             let r = residual(&mut solver, &step);
-            rows.push(row(method, k, seconds, sweep, r));
+            rows.push(row(method, k, seconds, sweep, r, linear));
         }
     }
     Ok(rows)
@@ -317,6 +332,16 @@ fn run_ops(
     start.elapsed().as_secs_f64()
 }
 
+/// |r|/|f| of the last Newton step's linear solve: its conjugate-gradient residual over the
+/// right-hand side, both summed as the kernels sum them.
+fn linear_residual(solver: &CpuSolver) -> Option<f32> {
+    let newton = solver.vbd.as_ref()?.newton.as_ref()?;
+    let (r, f) = (&newton.levels[0].rhs, &newton.force);
+    let ff = crate::cpu::dot(f, f);
+    // A balanced start (f = 0) leaves nothing to solve: no ratio.
+    (ff > 0.0).then(|| (crate::cpu::dot(r, r) / ff).sqrt())
+}
+
 /// The force residual at the iterate (not timed).
 fn residual(solver: &mut CpuSolver, step: &crate::model::layout::SubstepParams) -> (f32, f32) {
     solver.run_solve_ops(&[SolveOp::ForceResidual], step);
@@ -325,11 +350,11 @@ fn residual(solver: &mut CpuSolver, step: &crate::model::layout::SubstepParams) 
 
 fn csv(rows: &[ConvergenceRow]) -> String {
     let mut out = String::from(
-        "refinement,particles,method,iterations,sweep_equivalents,seconds,residual_max,residual_rms\n",
+        "refinement,particles,method,iterations,sweep_equivalents,seconds,residual_max,residual_rms,linear_residual\n",
     );
     for r in rows {
         out += &format!(
-            "{},{},{},{},{:.3},{:.6},{:.4e},{:.4e}\n",
+            "{},{},{},{},{:.3},{:.6},{:.4e},{:.4e},{}\n",
             r.refinement,
             r.particles,
             r.method,
@@ -337,7 +362,9 @@ fn csv(rows: &[ConvergenceRow]) -> String {
             r.sweep_equivalents,
             r.seconds,
             r.residual_max,
-            r.residual_rms
+            r.residual_rms,
+            r.linear_residual
+                .map_or(String::new(), |l| format!("{l:.4e}"))
         );
     }
     out
@@ -377,6 +404,9 @@ fn command_options(opts: &ConvergenceOptions) -> String {
         opts.max_newton,
         opts.relax_frames
     );
+    if opts.linear_iterations != LINEAR_ITERATIONS {
+        s += &format!(" --linear-iterations {}", opts.linear_iterations);
+    }
     if let Some(f) = opts.frames {
         s += &format!(" --frames {f}");
     }
@@ -413,12 +443,13 @@ fn report(opts: &ConvergenceOptions, rows: &[ConvergenceRow], frame: u32) -> Str
         );
     }
     md += &format!(
-        "\nVBD ran at most {} sweeps; Newton at most {} steps, each with {LINEAR_ITERATIONS} \
+        "\nVBD ran at most {} sweeps; Newton at most {} steps, each with {} \
          conjugate-gradient iterations preconditioned by a multigrid V-cycle, or with \
          {BLOCK_JACOBI_ITERATIONS} \
          preconditioned by the block diagonal. The full curves are in convergence.csv and \
-         convergence.svg.\n",
-        opts.max_sweeps, opts.max_newton
+         convergence.svg (`linear_residual`: how far each Newton step's linear solve got, \
+         |r|/|f|).\n",
+        opts.max_sweeps, opts.max_newton, opts.linear_iterations
     );
     md
 }

@@ -137,6 +137,11 @@ struct ConvergenceArgs {
     /// The most Newton steps (default 12; 3 with --quick).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     max_newton: Option<u32>,
+    /// Conjugate-gradient iterations in each measured multigrid Newton step (the run before the
+    /// measured substep solves as shipped)
+    #[arg(long, default_value_t = drapekit::plan::LINEAR_ITERATIONS,
+          value_parser = clap::value_parser!(u32).range(1..=1024))]
+    linear_iterations: u32,
     /// Fewer frames, two spacings and short curves (a smoke test).
     #[arg(long)]
     quick: bool,
@@ -461,6 +466,7 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
                     max_sweeps: c.max_sweeps.unwrap_or(quick(1024, 64)),
                     max_newton: c.max_newton.unwrap_or(quick(12, 3)),
                     relax_frames: c.relax_frames,
+                    linear_iterations: c.linear_iterations,
                     scene: c.scene,
                     out: c.out,
                 },
