@@ -16,8 +16,9 @@ use drapekit::solver::Solver;
 use glam::DVec2;
 use std::path::Path;
 
-const SHIPPED: [&str; 7] = [
+const SHIPPED: [&str; 8] = [
     "skirt_2panel.json",
+    "skirt_gathered.json",
     "tshirt.json",
     "circle_skirt.json",
     "skirt_mannequin.json",
