@@ -264,11 +264,12 @@ fn newton_steps_converge_alike_at_three_resolutions_where_sweeps_do_not() {
     for name in ["convergence.csv", "convergence.md", "convergence.svg"] {
         assert!(out.join(name).metadata().unwrap().len() > 0, "{name}");
     }
-    // Each Newton step reports how far its linear solve got: on this sheet a V-cycle cuts the
-    // linear residual about threefold per conjugate-gradient iteration at any resolution
-    // (`LINEAR_ITERATIONS`' note), so eight iterations leave at most 3⁻⁸ of it (measured: 1e-9
-    // to 3e-6). Sweeps have no linear solve.
-    let bound = 3f32.powi(-(LINEAR_ITERATIONS as i32));
+    // Each Newton step reports how far its linear solve got, |f − H·c|/|f|. A Newton step
+    // cannot cut the force residual by more than the share its linear solve leaves, so the
+    // thousandfold cut asserted below needs that share under 1e-3 at every resolution
+    // (measured: 2e-7 to 4.5e-4, the largest at the finest sheet's first step). Sweeps have
+    // no linear solve.
+    let bound = 1e-3;
     for r in &rows {
         match (r.method, r.linear_residual) {
             ("vbd", None) => {}

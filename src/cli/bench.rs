@@ -138,7 +138,8 @@ struct ConvergenceArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     max_newton: Option<u32>,
     /// Conjugate-gradient iterations in each measured multigrid Newton step (the run before the
-    /// measured substep solves as shipped)
+    /// measured substep solves as the scene does). Up to 1024: a Newton step of more than a
+    /// thousand V-cycles measures nothing a shorter one does not.
     #[arg(long, default_value_t = drapekit::plan::LINEAR_ITERATIONS,
           value_parser = clap::value_parser!(u32).range(1..=1024))]
     linear_iterations: u32,
