@@ -16,9 +16,10 @@ use drapekit::solver::Solver;
 use glam::DVec2;
 use std::path::Path;
 
-const SHIPPED: [&str; 8] = [
+const SHIPPED: [&str; 9] = [
     "skirt_2panel.json",
     "skirt_gathered.json",
+    "skirt_pencil.json",
     "tshirt.json",
     "circle_skirt.json",
     "skirt_mannequin.json",
