@@ -100,13 +100,13 @@ pub fn result_warnings(
     if let Some(s) = inside.filter(|s| s.particles + s.triangles > 0) {
         out.push(format!(
             "the body shows through the cloth at the last frame: {} of {} triangles have their \
-             centre and {} particles lie inside a body, up to {:.2} mm deep \
+             centre and {} particles lie inside a body, {} \
              (fix: check that the garment fits the body; a finer sdf_resolution_m, a larger \
              thickness_m or more substeps hold the cloth outside it)",
             s.triangles,
             s.of_triangles,
             s.particles,
-            1000.0 * s.deepest_m
+            how_deep(s.deepest_m)
         ));
     }
     if let (Some(limit), None, true) = (prep.settle_speed, &stats.settled, finished) {
@@ -139,8 +139,26 @@ fn list(what: &str, ids: &[usize]) -> String {
     }
 }
 
+/// How deep the cloth lies inside the body, in words: to a hundredth of a millimetre, and a
+/// depth that would print as 0.00 mm said as under a hundredth (it is there, however shallow).
+fn how_deep(depth_m: f32) -> String {
+    let mm = 1000.0 * depth_m;
+    if mm < 0.005 {
+        "by under 0.01 mm".into()
+    } else {
+        format!("up to {mm:.2} mm deep")
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_show_through_s_depth_never_reads_as_zero() {
+        assert_eq!(super::how_deep(0.00065), "up to 0.65 mm deep");
+        assert_eq!(super::how_deep(0.000006), "up to 0.01 mm deep");
+        assert_eq!(super::how_deep(0.000004), "by under 0.01 mm");
+    }
+
     #[test]
     fn seam_lists_read_as_english() {
         assert_eq!(super::list("seam", &[2]), "seam 3");
