@@ -346,12 +346,7 @@ fn linear_residual(solver: &CpuSolver) -> Option<f32> {
     let newton = solver.vbd.as_ref()?.newton.as_ref()?;
     let f = &newton.force;
     let mut r = vec![glam::Vec4::ZERO; f.len()];
-    newton.levels[0]
-        .by_colour
-        .product(&newton.correction, &mut r);
-    for (r, f) in r.iter_mut().zip(f) {
-        *r = *f - *r;
-    }
+    (newton.levels[0].by_colour).residual(f, &newton.correction, &mut r);
     let ff = crate::cpu::dot(f, f);
     // A balanced start (f = 0) leaves nothing to solve: no ratio.
     (ff > 0.0).then(|| (crate::cpu::dot(&r, &r) / ff).sqrt())
