@@ -39,6 +39,7 @@ struct SimParams {
     membrane_onset: f32,         // N·m, (√3/4)π²B: a membrane condition of stiffness K buckles at strain membrane_onset / K
     buckled_fraction: f32,       // 1, stiffness a buckled element keeps beyond (0: linear in compression)
     _pad0: u32,
+    stiffening: vec4<f32>,       // membrane in tension: x, y the warp's and weft's tangent growth per unit strain, z the strain where it stops growing (0: linear)
     bodies: array<BodyParams, MAX_BODIES>,
 }
 
@@ -141,51 +142,100 @@ fn unpack_spring(t: vec4<u32>) -> SpringRef {
     return SpringRef(t.x, bitcast<f32>(t.y), bitcast<f32>(t.z), bitcast<f32>(t.w));
 }
 
-// How cloth takes compression: linearly, or buckling (cpu: src/cpu/compression_law.rs, which
-// says why), for a spring's stretch |d| − L (onset params.euler_onset / L) and a membrane
-// condition's strain |w| − 1 (onset params.membrane_onset / K) alike.
-struct CompressionLaw {
+// How cloth's tension follows its stretch: linearly, buckling in compression, stiffening in
+// tension (cpu: src/cpu/stretch_law.rs, which says why), for a spring's stretch |d| − L (onset
+// params.euler_onset / L, no stiffening: StretchLaw(params.euler_onset / L,
+// params.buckled_fraction, 0.0, 0.0)) and a membrane condition's strain |w| − 1 (onset
+// params.membrane_onset / K, stiffening params.stiffening[0 warp, 1 weft] up to
+// params.stiffening.z) alike.
+struct StretchLaw {
     onset: f32,                  // the compression at which the element buckles
     fraction: f32,               // the share of its stiffness it keeps beyond (0: linear)
+    growth: f32,                 // g, the tangent's relative growth per unit stretch in tension (0: linear)
+    end: f32,                    // e, the stretch beyond which the tangent stays k·(1 + g·e)
 }
 
-fn law_buckled(law: CompressionLaw, s: f32) -> bool {
+fn law_buckled(law: StretchLaw, s: f32) -> bool {
     return law.fraction > 0.0 && s < -law.onset;
 }
 
+fn law_stiffening(law: StretchLaw, s: f32) -> bool {
+    return law.growth != 0.0 && s > 0.0;
+}
+
 // The element's tension at stretch s for stiffness k (positive pulls).
-fn law_tension(law: CompressionLaw, k: f32, s: f32) -> f32 {
+fn law_tension(law: StretchLaw, k: f32, s: f32) -> f32 {
     if (law_buckled(law, s)) {
         return -k * law.onset + law.fraction * k * (s + law.onset);
+    }
+    if (law_stiffening(law, s)) {
+        let t = min(s, law.end);
+        return k * (s + law.growth * t * (s - 0.5 * t));
     }
     return k * s;
 }
 
-// The axial stiffness the solves take at stretch s: k, and buckled the secant tension/s (cpu:
-// CompressionLaw::axial says why).
-fn law_axial(law: CompressionLaw, k: f32, s: f32) -> f32 {
+// The tension over its linear value k·s (1 when linear): the transverse Hessian's scale.
+fn law_secant_ratio(law: StretchLaw, s: f32) -> f32 {
+    if (law_stiffening(law, s)) {
+        return law_tension(law, 1.0, s) / s;
+    }
+    return 1.0;
+}
+
+// The axial stiffness the solves take at stretch s: k, buckled the secant tension/s (cpu:
+// StretchLaw::axial says why), stiffening the tangent.
+fn law_axial(law: StretchLaw, k: f32, s: f32) -> f32 {
     if (law_buckled(law, s)) {
         return law_tension(law, k, s) / s;
+    }
+    if (law_stiffening(law, s)) {
+        return k * (1.0 + law.growth * min(s, law.end));
     }
     return k;
 }
 
+// The stiffening's share of the energy per unit stiffness at stretch s (0 in compression).
+fn law_stiffening_energy(law: StretchLaw, s: f32) -> f32 {
+    if (!law_stiffening(law, s)) {
+        return 0.0;
+    }
+    let t = min(s, law.end);
+    return law.growth * t * (0.5 * s * s - 0.5 * t * s + t * t / 6.0);
+}
+
+// Its change from s1 to s2 = s1 + ds (sum = s1 + s2): a product with ds within one piece.
+fn law_stiffening_change(law: StretchLaw, s1: f32, s2: f32, sum: f32, ds: f32) -> f32 {
+    let g = law.growth;
+    let e = law.end;
+    if (s1 > 0.0 && s1 <= e && s2 > 0.0 && s2 <= e) {
+        return g * ds * (s1 * s1 + s1 * s2 + s2 * s2) / 6.0;
+    }
+    if (s1 > e && s2 > e) {
+        return 0.5 * g * e * ds * (sum - e);
+    }
+    return law_stiffening_energy(law, s2) - law_stiffening_energy(law, s1);
+}
+
 // The energy at stretch s.
-fn law_energy(law: CompressionLaw, k: f32, s: f32) -> f32 {
+fn law_energy(law: StretchLaw, k: f32, s: f32) -> f32 {
     if (law_buckled(law, s)) {
         let o = law.onset;
         let u = s + o;
         return 0.5 * k * o * o - k * o * u + 0.5 * law.fraction * k * u * u;
     }
-    return 0.5 * k * s * s;
+    return 0.5 * k * s * s + k * law_stiffening_energy(law, s);
 }
 
 // The change of the energy from stretch s1 to s2 = s1 + ds, sum = s1 + s2 as the caller
 // computes it without cancellation: a product with ds where both are on one branch.
-fn law_energy_change(law: CompressionLaw, k: f32, s1: f32, s2: f32, sum: f32, ds: f32) -> f32 {
+fn law_energy_change(law: StretchLaw, k: f32, s1: f32, s2: f32, sum: f32, ds: f32) -> f32 {
     let b1 = law_buckled(law, s1);
     let b2 = law_buckled(law, s2);
     if (!b1 && !b2) {
+        if (law.growth != 0.0) {
+            return 0.5 * k * ds * sum + k * law_stiffening_change(law, s1, s2, sum, ds);
+        }
         return 0.5 * k * ds * sum;
     }
     if (b1 && b2) {

@@ -140,7 +140,7 @@ fn vertex_system(i: u32, bodies: u32, assembling: bool) -> VertexSystem {
         let start_len = length(start);
         var block = mat3x3<f32>();
         if (len > 1e-12) {
-            let law = CompressionLaw(params.euler_onset / s.rest_length, params.buckled_fraction);
+            let law = StretchLaw(params.euler_onset / s.rest_length, params.buckled_fraction, 0.0, 0.0);
             let s_len = stretch(start, start_len, change, len, s.rest_length);
             f = f - law_tension(law, s.stiffness, s_len) / len * e;
             let axial = law_axial(law, s.stiffness, s_len);
@@ -455,9 +455,9 @@ fn membrane_stretch(s: vec3<f32>, dw: vec3<f32>) -> f32 {
 
 // Hessian of a stretch condition's energy per unit stiffness in w, made positive semi-definite,
 // with axial the law's axial stiffness per unit stiffness (cpu: membrane::stretch_hessian).
-fn membrane_stretch_hessian(axial: f32, n: vec3<f32>, len: f32) -> mat3x3<f32> {
+fn membrane_stretch_hessian(axial: f32, secant: f32, n: vec3<f32>, len: f32) -> mat3x3<f32> {
     let nn = outer(n, n);
-    return axial * nn + max(1.0 - 1.0 / len, 0.0) * (identity() - nn);
+    return axial * nn + (max(1.0 - 1.0 / len, 0.0) * secant) * (identity() - nn);
 }
 
 // A membrane's force on one vertex and its Hessian blocks towards the triangle's three
@@ -474,6 +474,7 @@ fn add_stretch_condition(
     s: vec3<f32>,
     dw: vec3<f32>,
     k: f32,
+    condition: u32,
     c: vec3<f32>,
     role: u32,
     damp: f32,
@@ -483,10 +484,10 @@ fn add_stretch_condition(
     let cr = c[role];
     if (len > 1e-12) {
         let n = w / len;
-        let law = CompressionLaw(params.membrane_onset / k, params.buckled_fraction);
+        let law = StretchLaw(params.membrane_onset / k, params.buckled_fraction, params.stiffening[condition], params.stiffening.z);
         let strain = membrane_stretch(s, dw);
         (*sys).f = (*sys).f - k * cr * law_tension(law, 1.0, strain) * n;
-        let hess = k * membrane_stretch_hessian(law_axial(law, 1.0, strain), n, len);
+        let hess = k * membrane_stretch_hessian(law_axial(law, 1.0, strain), law_secant_ratio(law, strain), n, len);
         for (var o = 0u; o < 3u; o = o + 1u) {
             (*sys).blocks[o] = (*sys).blocks[o] + (cr * c[o]) * hess;
         }
@@ -508,8 +509,8 @@ fn membrane_system(st: MembraneStep, m: Membrane, role: u32, h: f32) -> Membrane
     let k = m.stiffness;
     let damp = k.w / h;
     var sys = MembraneSystem(vec3<f32>(0.0), array<mat3x3<f32>, 3>());
-    add_stretch_condition(&sys, st.start_u, st.change_u, k.x, st.a, role, damp);
-    add_stretch_condition(&sys, st.start_v, st.change_v, k.y, st.b, role, damp);
+    add_stretch_condition(&sys, st.start_u, st.change_u, k.x, 0u, st.a, role, damp);
+    add_stretch_condition(&sys, st.start_v, st.change_v, k.y, 1u, st.b, role, damp);
     let wu = st.start_u + st.change_u;
     let wv = st.start_v + st.change_v;
     let g = st.a[role] * wv + st.b[role] * wu;
@@ -527,7 +528,7 @@ fn membrane_system(st: MembraneStep, m: Membrane, role: u32, h: f32) -> Membrane
 
 // One stretch condition's share of the energy change when its image changes by `step`, added
 // to e (cpu: one pass of the condition loop in MembraneStep::energy_change).
-fn add_stretch_change(e_in: f32, s: vec3<f32>, dw: vec3<f32>, step: vec3<f32>, k: f32, damp: f32) -> f32 {
+fn add_stretch_change(e_in: f32, s: vec3<f32>, dw: vec3<f32>, step: vec3<f32>, k: f32, condition: u32, damp: f32) -> f32 {
     let w = s + dw;
     let len = length(w);
     let len2 = length(w + step);
@@ -537,7 +538,7 @@ fn add_stretch_change(e_in: f32, s: vec3<f32>, dw: vec3<f32>, step: vec3<f32>, k
     if (len + len2 > 0.0) {
         ds = grow / (len + len2);
     }
-    let law = CompressionLaw(params.membrane_onset / k, params.buckled_fraction);
+    let law = StretchLaw(params.membrane_onset / k, params.buckled_fraction, params.stiffening[condition], params.stiffening.z);
     let strain = membrane_stretch(s, dw);
     var e = e_in + law_energy_change(law, k, strain, strain + ds, 2.0 * strain + ds, ds);
     let start_len = length(s);
@@ -557,8 +558,8 @@ fn membrane_energy_change(st: MembraneStep, m: Membrane, du: vec3<f32>, dv: vec3
     let damp = k.w / h;
     let wu = st.start_u + st.change_u;
     let wv = st.start_v + st.change_v;
-    var e = add_stretch_change(0.0, st.start_u, st.change_u, du, k.x, damp);
-    e = add_stretch_change(e, st.start_v, st.change_v, dv, k.y, damp);
+    var e = add_stretch_change(0.0, st.start_u, st.change_u, du, k.x, 0u, damp);
+    e = add_stretch_change(e, st.start_v, st.change_v, dv, k.y, 1u, damp);
     let shear = dot(wu, wv);
     let d_shear = dot(du, wv) + dot(wu, dv) + dot(du, dv);
     e = e + 0.5 * k.z * d_shear * (2.0 * shear + d_shear);

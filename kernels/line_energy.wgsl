@@ -98,7 +98,7 @@ fn energy_change(i: u32) -> vec3<f32> {
                 dl = grow / (len + len2);
             }
             let rest = s.rest_length;
-            let law = CompressionLaw(params.euler_onset / rest, params.buckled_fraction);
+            let law = StretchLaw(params.euler_onset / rest, params.buckled_fraction, 0.0, 0.0);
             let stretch = law_energy_change(law, s.stiffness, len - rest, len2 - rest, len + len2 - 2.0 * rest, dl);
             let dn = a * dot(n, dc);
             out[k] = out[k] + (stretch + 0.5 * s.damping / h * dn * (2.0 * dot(n, change) + dn));

@@ -30,14 +30,14 @@ fn membrane_image(m: Membrane, c1: f32, c2: f32, which: u32) -> vec3<f32> {
 }
 
 // One stretch condition's force on a vertex with coefficient c: −k·c·(t(|w| − 1) + τ·n̂·ẇ)·n̂,
-// t the compression law's tension per unit stiffness (the strain itself when linear).
-fn stretch_condition(w: vec3<f32>, dw: vec3<f32>, k: f32, c: f32, tau: f32) -> vec3<f32> {
+// t the stretch law's tension per unit stiffness (the strain itself when linear).
+fn stretch_condition(w: vec3<f32>, dw: vec3<f32>, k: f32, condition: u32, c: f32, tau: f32) -> vec3<f32> {
     let len = length(w);
     if (len <= 1e-12) {
         return vec3<f32>(0.0);
     }
     let n = w / len;
-    let law = CompressionLaw(params.membrane_onset / k, params.buckled_fraction);
+    let law = StretchLaw(params.membrane_onset / k, params.buckled_fraction, params.stiffening[condition], params.stiffening.z);
     let strain = law_tension(law, 1.0, len - 1.0);
     return -k * c * (strain + tau * dot(n, dw)) * n;
 }
@@ -53,8 +53,8 @@ fn membrane_force(m: Membrane, role: u32) -> vec3<f32> {
     let k = m.stiffness;
     let g = a * wv + b * wu;
     var f = -k.z * dot(wu, wv) * g - k.w * k.z * (dot(du, wv) + dot(wu, dv)) * g;
-    f = f + stretch_condition(wu, du, k.x, a, k.w);
-    f = f + stretch_condition(wv, dv, k.y, b, k.w);
+    f = f + stretch_condition(wu, du, k.x, 0u, a, k.w);
+    f = f + stretch_condition(wv, dv, k.y, 1u, b, k.w);
     return f;
 }
 

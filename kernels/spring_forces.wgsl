@@ -27,7 +27,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             let dir = d / len;
             let stretch = len - s.rest_length;
             let closing_speed = dot(textureLoad(vel, texel(s.other), 0).xyz - vi, dir);
-            let law = CompressionLaw(params.euler_onset / s.rest_length, params.buckled_fraction);
+            let law = StretchLaw(params.euler_onset / s.rest_length, params.buckled_fraction, 0.0, 0.0);
             let tension = law_tension(law, s.stiffness, stretch);
             f = f + (tension + s.damping * closing_speed) * dir;
         }

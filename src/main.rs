@@ -632,18 +632,18 @@ fn stop_on_ctrl_c() {
 
 /// How implicit Euler solves each substep, in one line for `drapekit plan`.
 /// With `compression = "buckling"`: the mean compressive strain at which the cloth's elements
-/// buckle (the membrane's warp conditions, else the springs: `cpu::compression_law`).
+/// buckle (the membrane's warp conditions, else the springs: `cpu::stretch_law`).
 fn buckling_onset_strain(prep: &drapekit::sim::Prepared) -> Option<f64> {
     let (p, m) = (&prep.params, &prep.model);
     if p.buckled_fraction <= 0.0 {
         return None;
     }
-    use drapekit::cpu::compression_law::CompressionLaw;
+    use drapekit::cpu::stretch_law::StretchLaw;
     let strains: Vec<f64> = if m.membranes.is_empty() {
-        let strain = |l: f32| (CompressionLaw::spring(p, l).onset / l) as f64;
+        let strain = |l: f32| (StretchLaw::spring(p, l).onset / l) as f64;
         m.springs.iter().map(|s| strain(s.rest_length)).collect()
     } else {
-        let strain = |k: f32| CompressionLaw::membrane(p, k).onset as f64;
+        let strain = |k: f32| StretchLaw::membrane(p, k, 0).onset as f64;
         m.membranes.iter().map(|t| strain(t.stiffness[0])).collect()
     };
     Some(strains.iter().sum::<f64>() / strains.len().max(1) as f64)

@@ -63,6 +63,7 @@ fn sim_params_layout() {
             ("membrane_onset", offset_of!(SimParams, membrane_onset)),
             ("buckled_fraction", offset_of!(SimParams, buckled_fraction)),
             ("_pad0", offset_of!(SimParams, _pad0)),
+            ("stiffening", offset_of!(SimParams, stiffening)),
             ("bodies", offset_of!(SimParams, bodies)),
         ],
     );

@@ -21,6 +21,7 @@ const COTTON: Orthotropic = Orthotropic {
     weft: 4069.9,
     shear: 52.0,
     bending: None,
+    large_strain: None,
 };
 
 /// A 0.5 m square sheet of 9 × 9 particles in the xy plane, its warp `grain` radians from x, no
@@ -197,6 +198,75 @@ fn force_is_minus_the_energy_gradient_with_buckling() {
     force_is_minus_the_energy_gradient_with(&p);
 }
 
+/// The same for a membrane that stiffens steeply (g = 200 per unit strain up to e = 0.02):
+/// the sheet's 4 mm noise over 6 cm edges stretches some checked conditions within the growth
+/// and some beyond it. The energy is C² within each piece and C¹ in its tangent at e, so the
+/// central differences' error stays the third derivative's, g·K·c³·h² (2e-5 N at most).
+#[test]
+fn force_is_minus_the_energy_gradient_with_stiffening() {
+    let p = SimParams {
+        stiffening: [200.0, 200.0, 0.02, 0.0],
+        ..Default::default()
+    };
+    let (model, x) = deformed(4e-3, 7);
+    let zero = vec![Vec4::ZERO; x.len()];
+    let csr = model.membrane_csr();
+    let (mut within, mut beyond) = (0, 0);
+    for i in GRADIENT_VERTICES {
+        for &r in &csr.items[csr.offsets[i] as usize..csr.offsets[i + 1] as usize] {
+            let step = MembraneStep::at(&model.membranes[(r / 4) as usize], &x, &zero);
+            for c in 0..2 {
+                let s = step.stretch(c);
+                within += usize::from(s > 0.0 && s <= 0.02);
+                beyond += usize::from(s > 0.02);
+            }
+        }
+    }
+    assert!(
+        within >= 2 && beyond >= 2,
+        "{within} within, {beyond} beyond"
+    );
+    force_is_minus_the_energy_gradient_with(&p);
+}
+
+/// The jersey preset's weft, pulled uniaxially (no lateral strain: the model has no Poisson
+/// coupling) with `tension = "stiffening"`: the tension the sheet carries at 1/6 is the one
+/// Wang et al. 2011's fitted model gives there, (1 + e)·k_eff·(e + e²/2) with the lateral-free
+/// k_eff = 696.1 N/m of its 90° large-strain sample (146.6 N/m, 20 times the linear
+/// membrane's 7.15), and beyond it the tangent stays at the preset's 1,717 N/m.
+#[test]
+fn a_stiffening_jersey_carries_its_measured_tension() {
+    let toml = "[cloth.grid]\nwidth_m = 0.2\nheight_m = 0.2\ncolumns = 7\nrows = 7\n\
+         center_m = [0.0, 1.0, 0.0]\n\n[fabric]\npreset = \"jersey\"\nmodel = \"membrane\"\n\
+         tension = \"stiffening\"\n\n[solver]\nfps = 24\nframes = 1\n";
+    let scene = Scene::parse(toml, std::path::Path::new("jersey.toml")).expect("parses");
+    let jersey = scene.fabric.membrane.unwrap();
+    let model = sheet(jersey, 0.0);
+    let p = SimParams {
+        stiffening: scene.fabric.stiffening(),
+        ..Default::default()
+    };
+    let x = model.packed_positions();
+    // The energy per unit area of a uniform weft (y) strain s, and its tension by central
+    // differences at ±1e-3·s.
+    let area = 0.25;
+    let energy = |s: f32| energy_with(&p, &model, &x, &strained(&model, [0.0, s, 0.0])) / area;
+    let tension = |s: f32| {
+        let h = 1e-3 * s;
+        (energy(s + h) - energy(s - h)) / (2.0 * h)
+    };
+    let e = 1.0 / 6.0f32;
+    let w11 = (1.0 + e) * 696.09 * (e + 0.5 * e * e);
+    // Central differences of f32 energies (~10 J/m², rounding 1e-6 relative over 2e-3 of the
+    // strain: 1e-3 relative of the tension) and the preset's four digits (1e-4): 2e-3.
+    let at_e = tension(e);
+    assert!((at_e / w11 - 1.0).abs() < 2e-3, "{at_e} N/m vs W11's {w11}");
+    assert!(at_e > 19.0 * 42.92 * e, "{at_e}: not stiffened");
+    // Beyond e the tension grows at the large-strain tangent: (T(0.25) − T(0.2))/0.05.
+    let tangent = (tension(0.25) - tension(0.2)) / 0.05;
+    assert!((tangent / 1716.6 - 1.0).abs() < 1e-2, "{tangent} N/m");
+}
+
 fn force_is_minus_the_energy_gradient_with(p: &SimParams) {
     let (model, x) = deformed(4e-3, 7);
     let vel = vec![Vec4::ZERO; x.len()];
@@ -236,13 +306,32 @@ fn force_is_minus_the_energy_gradient_with(p: &SimParams) {
 
 #[test]
 fn hessian_blocks_are_the_force_derivative_under_pure_warp_stretch() {
-    // 1% along the warp (here x): w_u stretched, w_v unit and orthogonal, so the shear condition
-    // is zero, the dropped curvature term vanishes and no stretch condition is compressed.
+    hessian_blocks_are_the_force_derivative_under_warp_stretch(&SimParams::default(), 0.01);
+}
+
+/// The same for a membrane that stiffens (g = 20 per unit strain up to e = 0.05, so that its
+/// tangent is twice k at 5%), stretched 3% (within the growth) and 8% (beyond it): the axial
+/// block is the tangent and the transverse one the tension over |w|.
+#[test]
+fn hessian_blocks_are_the_force_derivative_of_a_stiffening_membrane() {
+    let p = SimParams {
+        stiffening: [20.0, 20.0, 0.05, 0.0],
+        ..Default::default()
+    };
+    for stretch in [0.03, 0.08] {
+        hessian_blocks_are_the_force_derivative_under_warp_stretch(&p, stretch);
+    }
+}
+
+/// The force and the diagonal Hessian block of an interior vertex under `stretch` along the
+/// warp (here x): w_u stretched, w_v unit and orthogonal, so the shear condition is zero, the
+/// dropped curvature term vanishes and no stretch condition is compressed.
+fn hessian_blocks_are_the_force_derivative_under_warp_stretch(p: &SimParams, stretch: f32) {
     let model = sheet(COTTON, 0.0);
     let x0 = model.packed_positions();
     let x: Vec<Vec4> = x0
         .iter()
-        .map(|p| Vec4::new(1.01 * p.x, p.y, p.z, p.w))
+        .map(|q| Vec4::new((1.0 + stretch) * q.x, q.y, q.z, q.w))
         .collect();
     let i = 40usize; // an interior vertex
     let csr = model.membrane_csr();
@@ -251,7 +340,7 @@ fn hessian_blocks_are_the_force_derivative_under_pure_warp_stretch() {
         let mut f = Vec3::ZERO;
         for &r in &csr.items[csr.offsets[i] as usize..csr.offsets[i + 1] as usize] {
             f += membrane_force(
-                &SimParams::default(),
+                p,
                 &model.membranes[(r / 4) as usize],
                 (r % 4) as usize,
                 x,
@@ -266,12 +355,11 @@ fn hessian_blocks_are_the_force_derivative_under_pure_warp_stretch() {
     for &r in &csr.items[csr.offsets[i] as usize..csr.offsets[i + 1] as usize] {
         let m: &Membrane = &model.membranes[(r / 4) as usize];
         let role = (r % 4) as usize;
-        let (f, blocks) =
-            MembraneStep::at(m, &x, &zero).system(&SimParams::default(), m, role, 1.0);
+        let (f, blocks) = MembraneStep::at(m, &x, &zero).system(p, m, role, 1.0);
         block += blocks[role];
         // Implicit Euler's force and the explicit integrators' are one function (τ = 0), per
         // triangle (the interior vertex's sum is zero under a uniform stretch): a few ulps.
-        let explicit = membrane_force(&SimParams::default(), m, role, &x, &vel);
+        let explicit = membrane_force(p, m, role, &x, &vel);
         assert!(
             (f - explicit).length() <= 1e-5 * explicit.length(),
             "{f} vs {explicit}"
@@ -286,8 +374,10 @@ fn hessian_blocks_are_the_force_derivative_under_pure_warp_stretch() {
         let step = xp[i][axis] - xm[i][axis];
         let column = -(force_at(&xp) - force_at(&xm)) / step;
         // The force is linear in x up to |x|·k/L² terms: central differences err by
-        // h²·∂³f ≈ (1e-5)²·k·A·α³ ≈ 1e-10·4000·0.002·4e3 = 3e-6 N/m; f32 rounding of the forces
-        // (~1e-7 of ~100 N) over 2e-5 m: 1 N/m, against diagonal entries of ~1e4 N/m.
+        // h²·∂³f ≈ (1e-5)²·k·A·α³ ≈ 1e-10·4000·0.002·4e3 = 3e-6 N/m (the stiffening's growth
+        // adds g·k·A·α³·h² of the same size); f32 rounding of the forces (~1e-7 of the
+        // triangles' ~1 N, ~20 N stretched 8% and stiffened) over 2e-5 m: under 1 N/m, against
+        // diagonal entries of ~1e3–1e4 N/m.
         let err = (column - block.col(axis)).length();
         assert!(
             err < 1e-3 * block.col(axis).length() + 2.0,
@@ -329,6 +419,14 @@ fn rigid_rotation_costs_nothing() {
 /// The lowest row's drop below its rest height after a 0.4 m × 0.1 m strip of cotton hangs
 /// from its top edge for two seconds (implicit Euler, warp `grain_deg` from horizontal).
 fn strip_extension(grain_deg: f32, integrator: &str) -> f32 {
+    let fabric = format!("preset = \"cotton\"\nmodel = \"membrane\"\ngrain_deg = {grain_deg}");
+    hanging_strip_extension(&fabric, integrator, 1.0)
+}
+
+/// How far the bottom of a 10 × 40 cm strip of `fabric` (the `[fabric]` table's lines), pinned
+/// along its top, sinks under its own weight after two seconds (m), with air damping
+/// `air_damping` (1/s).
+fn hanging_strip_extension(fabric: &str, integrator: &str, air_damping: f32) -> f32 {
     let toml = format!(
         r#"
 [cloth.grid]
@@ -339,16 +437,14 @@ rows = 21
 center_m = [0.0, 1.0, 0.0]
 
 [fabric]
-preset = "cotton"
-model = "membrane"
-grain_deg = {grain_deg}
+{fabric}
 
 [[pins]]
 edge = "top"
 
 [world]
 gravity_m_s2 = [0.0, -9.81, 0.0]
-air_damping_per_s = 1.0
+air_damping_per_s = {air_damping}
 
 [solver]
 fps = 24
@@ -404,6 +500,38 @@ fn bias_cut_strip_stretches_as_its_shear_says() {
         bias > 0.56 * free && bias < free,
         "bias: {bias} m, lateral-free {free} m"
     );
+}
+
+/// The jersey's weft hanging under its own weight with `tension = "stiffening"`: at depth y
+/// the load is T = ρg·y per width (y from the bottom), the law's strain there solves
+/// k·(s + g·s²/2) = T (the load stays under the growth's end), and the extension is its
+/// integral over the height; the linear membrane would stretch twice as far.
+#[test]
+fn a_stiffening_strip_stretches_as_its_law_says() {
+    let fabric = "preset = \"jersey\"\nmodel = \"membrane\"\ntension = \"stiffening\"";
+    let (rho, k, large, e) = (0.187f64, 42.92f64, 1716.6f64, 1.0f64 / 6.0);
+    let g = (large / k - 1.0) / e;
+    let (height, rows) = (0.4f64, 4000);
+    let strain = |t: f64| ((1.0 + 2.0 * g * t / k).sqrt() - 1.0) / g;
+    let expected = (0..rows)
+        .map(|r| {
+            strain(rho * 9.81 * height * (r as f64 + 0.5) / rows as f64) * height / rows as f64
+        })
+        .sum::<f64>() as f32;
+    let linear = (rho * 9.81 * height * height / 2.0 / k) as f32;
+    assert!(strain(rho * 9.81 * height) < e && expected < 0.6 * linear);
+    // As for the straight-grain cotton strip: the rows' lumped load (0.25%) and the strip's
+    // last motion after two seconds, 2%. The knit's bounce along the strip (a period of about
+    // 0.06 s) is far below the edges' frequency that its damping ratio is set at, and under
+    // symplectic Euler 1/s of air damping left it 22% over after two seconds (measured; 4.5% at
+    // four): 10/s damps it to e⁻¹⁰ and leaves the static answer as it is.
+    for integrator in ["implicit", "symplectic"] {
+        let got = hanging_strip_extension(fabric, integrator, 10.0);
+        assert!(
+            (got - expected).abs() < 0.02 * expected,
+            "{integrator}: {got} m, expected {expected} m (linear: {linear} m)"
+        );
+    }
 }
 
 /// A grid cloth's hinges as a denim membrane with its warp `grain_deg` from the grid's width

@@ -292,6 +292,29 @@ fn parity_membrane_forces_buckling() {
     pass_parity_in(prep, Pass::MembraneForces);
 }
 
+/// The membrane sheet stiffening in tension (its large-strain tangents 10 times its warp and
+/// weft, reached at 1/6): the 5 mm perturbation stretches many conditions within the growth
+/// and some beyond it. The bound is `parity_membrane_forces`'s: the stiffened tension carries
+/// the strain's rounding times its tangent, at most 10 times the linear one's share of a force
+/// that grows alike.
+#[test]
+fn parity_membrane_forces_stiffening() {
+    let mut scene = membrane_sheet(32);
+    let membrane = scene.fabric.membrane.as_mut().expect("a membrane");
+    membrane.large_strain = Some([3000.0, 1500.0]);
+    let prep = prepare(&scene).unwrap();
+    assert!(prep.params.stiffening[0] > 0.0 && prep.params.stiffening[2] > 0.0);
+    let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let state = perturbed(&cpu.state().unwrap(), 7, 5e-3, 0.5);
+    let (within, beyond) = common::stiffened_conditions(&prep, &state.positions);
+    let conditions = 2 * prep.model.membranes.len();
+    assert!(
+        within * 5 > conditions && beyond > 0,
+        "{within} within, {beyond} beyond of {conditions}"
+    );
+    pass_parity_in(prep, Pass::MembraneForces);
+}
+
 #[test]
 fn parity_strain_limit() {
     // The 5 mm perturbation stretches the flag's 4.3 cm edges by up to 23%: past the 10% limit.

@@ -583,6 +583,7 @@ mod tests {
             weft: 50.0,
             shear: 5.0,
             bending: None,
+            large_strain: None,
         };
         [None, Some(membrane)].map(|m| ClothModel::from_mesh(&mesh, &fabric(m), &[]))
     }

@@ -14,7 +14,7 @@
 //! The terms (each a potential in D within a step, so that a line search can compare
 //! energies):
 //! - inertia ½(m/h²)|D − Y|², Y = h·vₙ + h²·(g + f_wind/m); air damping ½(c·m/h)|D|²;
-//! - springs ½k(|d| − L)², or buckling in compression (`compression_law`), Hessian made positive
+//! - springs ½k(|d| − L)², or buckling in compression (`stretch_law`), Hessian made positive
 //!   semi-definite (a compressed spring's transverse term dropped), and damping ½(c/h)(n̂ₙ·(Dᵢ − Dⱼ))² along the spring's
 //!   direction at the start of the step n̂ₙ;
 //! - hinges w₀·ψ(θ), ψ = −2cos(θ/2) − sin(θ₀/2)·θ, whose gradient is the Bridson hinge force
@@ -30,10 +30,10 @@
 //!   f₀(s) = s²/(2ε) below ε = ε_v·h, s − ε/2 above: Coulomb friction, static (proportional to
 //!   the slip) below the slip speed ε_v.
 
-use super::compression_law::CompressionLaw;
 use super::hinge_forces::HingeFrame;
 use super::membrane::MembraneStep;
 use super::seam_forces::rest_gap;
+use super::stretch_law::StretchLaw;
 use crate::model::layout::{Hinge, Membrane, Seam, SimParams, SpringRef, SubstepParams};
 use crate::model::multigrid::ElementBlocks;
 use glam::{Mat3, Vec3, Vec3A, Vec4};
@@ -304,7 +304,7 @@ impl Implicit<'_> {
             if len > 1e-12 {
                 let (k, rest) = (s.stiffness, s.rest_length);
                 let stretch = stretch(start, start_len, change, len, rest);
-                let law = CompressionLaw::spring(p, rest);
+                let law = StretchLaw::spring(p, rest);
                 f -= law.tension(k, stretch) / len * e;
                 let axial = law.axial(k, stretch);
                 block += spring_hessian(axial, k, rest, e, len);
@@ -457,7 +457,7 @@ impl Implicit<'_> {
                 Vec3::ZERO
             };
             let rest = s.rest_length;
-            let law = CompressionLaw::spring(p, rest);
+            let law = StretchLaw::spring(p, rest);
             for (o, &a) in out.iter_mut().zip(&alphas) {
                 let grow = 2.0 * a * e.dot(dc) + a * a * dc.length_squared();
                 let len2 = (e + a * dc).length();

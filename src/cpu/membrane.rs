@@ -12,15 +12,17 @@
 //! (`model::membrane`), along the conditions' gradients.
 //!
 //! With `compression = "buckling"` each stretch condition takes compression by
-//! `compression_law` (its strip's Euler strain, then a small fraction of its stiffness).
+//! `stretch_law` (its strip's Euler strain, then a small fraction of its stiffness).
 //!
-//! Known limits: the stiffness is linear in strain (the measured curves stiffen, Wang et al.
-//! 2011); buckling acts on the warp and the weft conditions each, not on the principal
+//! With `tension = "stiffening"` each stretch condition's tangent stiffness rises with its
+//! strain (`stretch_law`), as the measured curves do (Wang et al. 2011).
+//!
+//! Known limits: the shear condition is linear; buckling acts on the warp and the weft conditions each, not on the principal
 //! compression (shear is linear); large shear couples with stretch through w_u·w_v =
 //! |w_u||w_v|cos.
 
-use super::compression_law::CompressionLaw;
 use super::grain;
+use super::stretch_law::StretchLaw;
 use crate::model::layout::{Membrane, SimParams};
 use glam::{Mat3, Vec3, Vec4};
 use rayon::prelude::*;
@@ -50,12 +52,15 @@ pub fn membrane_force(
     let (du, dv) = (image(m, &a, vel), image(m, &b, vel));
     let g = a[role] * wv + b[role] * wu;
     let mut f = -ks * wu.dot(wv) * g - tau * ks * (du.dot(wv) + wu.dot(dv)) * g;
-    for (w, dw, k, c) in [(wu, du, ku, a[role]), (wv, dv, kv, b[role])] {
+    for (condition, (w, dw, k, c)) in [(wu, du, ku, a[role]), (wv, dv, kv, b[role])]
+        .into_iter()
+        .enumerate()
+    {
         let len = w.length();
         if len > 1e-12 {
             let n = w / len;
             // The law's tension per unit stiffness: the strain itself when linear.
-            let strain = CompressionLaw::membrane(p, k).tension(1.0, len - 1.0);
+            let strain = StretchLaw::membrane(p, k, condition).tension(1.0, len - 1.0);
             f -= k * c * (strain + tau * n.dot(dw)) * n;
         }
     }
@@ -90,11 +95,12 @@ pub fn membrane_forces(
 }
 
 /// Hessian of a stretch condition's energy per unit stiffness in w, made positive
-/// semi-definite: `axial`·n̂n̂ᵀ + max(0, 1 − 1/|w|)·(I − n̂n̂ᵀ), `axial` the law's axial stiffness
-/// per unit stiffness (1 when linear).
-pub fn stretch_hessian(axial: f32, n: Vec3, len: f32) -> Mat3 {
+/// semi-definite: `axial`·n̂n̂ᵀ + max(0, 1 − 1/|w|)·`secant`·(I − n̂n̂ᵀ), `axial` the law's axial
+/// stiffness and `secant` its tension over the linear one (both 1 when linear): the transverse
+/// term is the tension over |w|.
+pub fn stretch_hessian(axial: f32, secant: f32, n: Vec3, len: f32) -> Mat3 {
     let nn = super::implicit_terms::outer(n, n);
-    axial * nn + (1.0 - 1.0 / len).max(0.0) * (Mat3::IDENTITY - nn)
+    axial * nn + ((1.0 - 1.0 / len).max(0.0) * secant) * (Mat3::IDENTITY - nn)
 }
 
 /// One membrane in implicit Euler's step: its conditions at the start of the step and at
@@ -168,9 +174,9 @@ impl MembraneStep {
             let cr = self.coefficient(c, role);
             if len > 1e-12 {
                 let n = w[c] / len;
-                let (law, s) = (CompressionLaw::membrane(p, k), self.stretch(c));
+                let (law, s) = (StretchLaw::membrane(p, k, c), self.stretch(c));
                 f -= k * cr * law.tension(1.0, s) * n;
-                let hess = k * stretch_hessian(law.axial(1.0, s), n, len);
+                let hess = k * stretch_hessian(law.axial(1.0, s), law.secant_ratio(s), n, len);
                 for (s, block) in blocks.iter_mut().enumerate() {
                     *block += (cr * self.coefficient(c, s)) * hess;
                 }
@@ -216,7 +222,7 @@ impl MembraneStep {
                 0.0
             };
             let s = self.stretch(c);
-            e += CompressionLaw::membrane(p, k).energy_change(k, s, s + ds, 2.0 * s + ds, ds);
+            e += StretchLaw::membrane(p, k, c).energy_change(k, s, s + ds, 2.0 * s + ds, ds);
             let start_len = self.start[c].length();
             if start_len > 1e-12 {
                 let n = self.start[c] / start_len;

@@ -1,7 +1,7 @@
 //! CPU twin of `kernels/spring_forces.wgsl`.
 
-use super::compression_law::CompressionLaw;
 use super::grain;
+use super::stretch_law::StretchLaw;
 use crate::model::layout::{SimParams, SpringRef};
 use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
@@ -35,7 +35,7 @@ pub fn spring_forces(
                     let dir = d / len;
                     let stretch = len - s.rest_length;
                     let closing_speed = (Vec3A::from_vec4(vel[s.other as usize]) - vi).dot(dir);
-                    let law = CompressionLaw::spring(params, s.rest_length);
+                    let law = StretchLaw::spring(params, s.rest_length);
                     let tension = law.tension(s.stiffness, stretch);
                     f += (tension + s.damping * closing_speed) * dir;
                 }

@@ -113,7 +113,36 @@ pub fn input_warnings(scene: &Scene, bodies: &[Body]) -> Vec<String> {
     out
 }
 
-/// The fabric's values outside `MARGIN` × the measured ranges, and buckling without bending.
+/// A stiffening membrane whose large-strain stiffness is below its small-strain one softens as
+/// it stretches: the law runs it, but every measured fabric stiffens (Wang et al. 2011).
+fn softening_warnings(scene: &Scene, m: &crate::scene::Orthotropic) -> Vec<String> {
+    let Some(large) = m.large_strain else {
+        return Vec::new();
+    };
+    let axes = [
+        ("warp", m.warp, large[0], "warp_large_strain_stiffness_n_m"),
+        ("weft", m.weft, large[1], "weft_large_strain_stiffness_n_m"),
+    ];
+    (axes.into_iter())
+        .filter(|a| a.2 < a.1)
+        .map(|(axis, small, large, key)| {
+            let problem = format!(
+                "the {axis}'s large-strain stiffness {} N/m is below its small-strain {} N/m: \
+                 the membrane softens as it stretches, where measured fabrics stiffen",
+                short(large as f64),
+                short(small as f64)
+            );
+            let fix = format!(
+                "give {key} at least {} N/m, or tension = \"linear\"",
+                short(small as f64)
+            );
+            one_line(&scene.error("fabric", key, problem, fix))
+        })
+        .collect()
+}
+
+/// The fabric's values outside `MARGIN` × the measured ranges, a stiffening membrane that
+/// softens, and buckling without bending.
 pub fn fabric_warnings(scene: &Scene, fabric: &Fabric) -> Vec<String> {
     let m = fabric.membrane;
     let values = [
@@ -146,6 +175,9 @@ pub fn fabric_warnings(scene: &Scene, fabric: &Fabric) -> Vec<String> {
         );
         let e = scene.error("fabric", range.key, problem, fix(&range, v));
         out.push(one_line(&e));
+    }
+    if let Some(m) = m {
+        out.extend(softening_warnings(scene, &m));
     }
     if fabric.buckling && fabric.bending_stiffness.is_none() {
         let e = scene.error(
@@ -313,6 +345,29 @@ mod tests {
         );
         let s = scene(&format!("{plain}\nbending_stiffness_n_m = 2e-5"));
         assert!(fabric_warnings(&s, &s.fabric).is_empty());
+    }
+
+    #[test]
+    fn measured_stiffening_is_plausible_and_softening_is_warned() {
+        for p in PRESETS.iter().filter(|p| p.large_strain_n_m.is_some()) {
+            let text = format!(
+                "preset = \"{}\"\nmodel = \"membrane\"\ntension = \"stiffening\"",
+                p.name
+            );
+            let s = scene(&text);
+            assert!(fabric_warnings(&s, &s.fabric).is_empty(), "{}", p.name);
+        }
+        let s = scene(
+            "preset = \"jersey\"\nmodel = \"membrane\"\ntension = \"stiffening\"\n\
+             weft_large_strain_stiffness_n_m = 30",
+        );
+        let w = fabric_warnings(&s, &s.fabric);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].contains("fabric.weft_large_strain_stiffness_n_m: the weft's large-strain stiffness 30 N/m is below its small-strain 42.9"),
+            "{}",
+            w[0]
+        );
     }
 
     #[test]

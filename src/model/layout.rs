@@ -43,7 +43,7 @@ pub struct SimParams {
     /// Implicit Euler with coarse levels: fine sweeps before each coarse correction and after
     /// the last one.
     pub smoothing: u32,
-    /// Cloth that buckles (`[fabric] compression = "buckling"`, `cpu::compression_law`):
+    /// Cloth that buckles (`[fabric] compression = "buckling"`, `cpu::stretch_law`):
     /// π²B/Y in m², B the bending rigidity and Y the stretch stiffness; a spring of rest
     /// length L buckles at compression `euler_onset / L`.
     pub euler_onset: f32,
@@ -53,8 +53,12 @@ pub struct SimParams {
     /// The share of its stiffness a buckled element keeps; 0: cloth is linear in compression
     /// (the default).
     pub buckled_fraction: f32,
-    /// Padding to the bodies' 16-byte alignment.
+    /// Padding to 16-byte alignment.
     pub _pad0: u32,
+    /// Membrane that stiffens in tension (`[fabric] tension = "stiffening"`,
+    /// `cpu::stretch_law`): the warp's and the weft's relative growth of tangent stiffness per
+    /// unit strain g, the strain e beyond which it stays k·(1 + g·e), unused; zeros: linear.
+    pub stiffening: [f32; 4],
     /// Each collision body's SDF and contact response.
     pub bodies: [BodyParams; MAX_BODIES],
 }

@@ -22,7 +22,7 @@ pub struct Fabric {
     /// "membrane"`); `None`: springs of `stretch_stiffness`.
     pub membrane: Option<Orthotropic>,
     /// The cloth buckles in compression (`compression = "buckling"`,
-    /// `cpu::compression_law`) rather than resist it linearly.
+    /// `cpu::stretch_law`) rather than resist it linearly.
     pub buckling: bool,
 }
 
@@ -41,7 +41,16 @@ pub struct Orthotropic {
     /// the warp and along the weft (`warp_bending_n_m`, `weft_bending_n_m`, else the preset's
     /// measurements); `None`: the fabric's one bending stiffness every way (`model::bending`).
     pub bending: Option<[f32; 2]>,
+    /// With `tension = "stiffening"`: the tangent stiffness along the warp and along the weft
+    /// at `LARGE_STRAIN` (N/m), to which each rises linearly from its small-strain value and
+    /// then stays (`cpu::stretch_law`); `None`: linear in tension.
+    pub large_strain: Option<[f32; 2]>,
 }
+
+/// The strain at which a stiffening membrane's tangent stiffness reaches its large-strain
+/// value: 1/6, the strain of Wang et al. 2011's large-strain samples, where the presets' values
+/// come from.
+pub const LARGE_STRAIN: f32 = 1.0 / 6.0;
 
 impl Orthotropic {
     /// The uniaxial stiffness of a strip cut at `angle` radians from the warp, lateral edges
@@ -64,7 +73,7 @@ impl Fabric {
     /// The cloth's law in compression as (`SimParams::euler_onset`,
     /// `SimParams::membrane_onset`, `SimParams::buckled_fraction`): with buckling, π²B/Y,
     /// (√3/4)·π²B (B = the hinge coefficient over `HINGE_PER_RIGIDITY`, 0 without bending) and
-    /// `BUCKLED_FRACTION`; zeros when linear (`cpu::compression_law` says why).
+    /// `BUCKLED_FRACTION`; zeros when linear (`cpu::stretch_law` says why).
     pub fn compression_law(&self) -> [f32; 3] {
         if !self.buckling {
             return [0.0; 3];
@@ -78,11 +87,39 @@ impl Fabric {
         ]
     }
 
+    /// The membrane's law in tension as `SimParams::stiffening`: the warp's and the weft's
+    /// tangent growth per unit strain g = (k_large/k − 1)/e and the end strain e =
+    /// `LARGE_STRAIN`; zeros when linear.
+    pub fn stiffening(&self) -> [f32; 4] {
+        match self.membrane {
+            Some(
+                m @ Orthotropic {
+                    large_strain: Some([warp, weft]),
+                    ..
+                },
+            ) => {
+                let growth = |large: f32, small: f32| (large / small - 1.0) / LARGE_STRAIN;
+                [
+                    growth(warp, m.warp),
+                    growth(weft, m.weft),
+                    LARGE_STRAIN,
+                    0.0,
+                ]
+            }
+            _ => [0.0; 4],
+        }
+    }
+
     /// The stiffest stretch the cloth has, in N/m (the springs', or the membrane's stiffer
     /// axis): what the stable-step and memory estimates take.
     pub fn stiffest_stretch(&self) -> f32 {
         match self.membrane {
-            Some(m) => m.warp.max(m.weft).max(self.stretch_stiffness),
+            Some(m) => {
+                let large = m.large_strain.unwrap_or([0.0; 2]);
+                (m.warp.max(m.weft).max(self.stretch_stiffness))
+                    .max(large[0])
+                    .max(large[1])
+            }
             None => self.stretch_stiffness,
         }
     }
@@ -222,6 +259,74 @@ fn parse_compression(c: &Checker, f: &RawFabric) -> Result<bool, InputError> {
     }
 }
 
+/// `tension = "stiffening"` (the membrane's warp and weft tangent stiffness rises to its
+/// large-strain value: the scene's `warp_large_strain_stiffness_n_m` and
+/// `weft_large_strain_stiffness_n_m`, else the preset's measurements) or `"linear"` (the
+/// default). The large-strain keys without stiffening are refused, as is stiffening with
+/// neither keys nor measurements.
+fn parse_tension(
+    c: &Checker,
+    f: &RawFabric,
+    preset: Option<&FabricPreset>,
+) -> Result<Option<[f32; 2]>, InputError> {
+    let keys = [
+        (
+            "warp_large_strain_stiffness_n_m",
+            f.warp_large_strain_stiffness_n_m,
+        ),
+        (
+            "weft_large_strain_stiffness_n_m",
+            f.weft_large_strain_stiffness_n_m,
+        ),
+    ];
+    match f.tension.as_deref() {
+        None | Some("linear") => match keys.iter().find(|k| k.1.is_some()) {
+            Some((key, _)) => Err(c.err(
+                "fabric",
+                key,
+                format!(
+                    "{key} is the stiffness a stiffening membrane rises to, but tension is linear"
+                ),
+                "add tension = \"stiffening\" to [fabric], or remove the key",
+            )),
+            None => Ok(None),
+        },
+        Some("stiffening") => {
+            let measured = preset.and_then(|p| p.large_strain_n_m);
+            let mut v = [0.0f32; 2];
+            for (i, (out, (key, given))) in v.iter_mut().zip(keys).enumerate() {
+                let value = given.or(measured.map(|m| m[i])).ok_or_else(|| {
+                    let fix = match preset {
+                        Some(p) => format!(
+                            "give {key}: the {} preset has no measured large-strain stiffness \
+                             (the jersey and denim presets do)",
+                            p.name
+                        ),
+                        None => format!("give {key}, or a preset that has it (jersey, denim)"),
+                    };
+                    c.err(
+                        "fabric",
+                        key,
+                        format!("missing {key} (tension = \"stiffening\")"),
+                        fix,
+                    )
+                })?;
+                *out = c.positive("fabric", key, value, "N/m")?;
+            }
+            Ok(Some(v))
+        }
+        Some(other) => Err(c.err(
+            "fabric",
+            "tension",
+            format!(
+                "unknown tension {other:?}{}",
+                crate::suggest::did_you_mean(other, ["stiffening", "linear"].into_iter())
+            ),
+            "use tension = \"stiffening\" (the membrane stiffens as it stretches) or \"linear\"",
+        )),
+    }
+}
+
 /// The membrane's bending by direction, as hinge coefficients of warp and weft strips: the
 /// scene's `warp_bending_n_m` and `weft_bending_n_m` (both or neither); else the preset's
 /// measured strips, unless the scene writes its own `bending_stiffness_n_m` (one value every
@@ -286,9 +391,30 @@ fn parse_membrane(
         ("warp_bending_n_m", f.warp_bending_n_m, None),
         ("weft_bending_n_m", f.weft_bending_n_m, None),
     ];
+    let tension_keys = [
+        (
+            "warp_large_strain_stiffness_n_m",
+            f.warp_large_strain_stiffness_n_m,
+            None,
+        ),
+        (
+            "weft_large_strain_stiffness_n_m",
+            f.weft_large_strain_stiffness_n_m,
+            None,
+        ),
+    ];
     match f.model.as_deref() {
         None | Some("springs") => {
-            if let Some((key, _, _)) = (keys.iter().chain(&bending_keys)).find(|k| k.1.is_some()) {
+            if f.tension.as_deref().is_some_and(|t| t != "linear") {
+                return Err(c.err(
+                    "fabric",
+                    "tension",
+                    "tension = \"stiffening\" is a law of the membrane, but the fabric is springs",
+                    "add model = \"membrane\" to [fabric], or remove the key",
+                ));
+            }
+            let mut membrane_keys = keys.iter().chain(&bending_keys).chain(&tension_keys);
+            if let Some((key, _, _)) = membrane_keys.find(|k| k.1.is_some()) {
                 return Err(c.err(
                     "fabric",
                     key,
@@ -317,6 +443,7 @@ fn parse_membrane(
                 weft: v[1],
                 shear: v[2],
                 bending,
+                large_strain: parse_tension(c, f, preset)?,
             }))
         }
         Some(other) => Err(c.err(

@@ -44,6 +44,9 @@ pub struct FabricPreset {
     /// The membrane's bending rigidity B of a strip cut along the warp, on the bias (45°) and
     /// along the weft, in N·m (`bending_stiffness_n_m` is the isotropic springs' value).
     pub strip_bending_n_m: [f64; 3],
+    /// The membrane's tangent stiffness along the warp and the weft at `LARGE_STRAIN` (1/6),
+    /// lateral edges free, in N/m, where measured: `tension = "stiffening"` rises to them.
+    pub large_strain_n_m: Option<[f64; 2]>,
     /// Spring damping as a fraction of critical.
     pub damping_ratio: f64,
     /// Where the values come from, in one line.
@@ -71,6 +74,7 @@ pub const PRESETS: &[FabricPreset] = &[
         // is its edge's, and a strip along u bends across edges at 90°), /4: 125.41e-6,
         // 107.998e-6, 125.41e-6 → 3.135e-5, 2.700e-5, 3.135e-5 N·m [D].
         strip_bending_n_m: [3.135e-5, 2.700e-5, 3.135e-5],
+        large_strain_n_m: None,
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "W11 royal-target (65/35 cotton/PES woven), proxy for shirting [M/D]",
@@ -93,6 +97,13 @@ pub const PRESETS: &[FabricPreset] = &[
         // Strips along u, on the bias, along v: the 90°, 45° and 0° hinge rows /4: 96.952e-6,
         // 73.385e-6, 64.196e-6 → 2.424e-5, 1.835e-5, 1.605e-5 N·m [D].
         strip_bending_n_m: [2.424e-5, 1.835e-5, 1.605e-5],
+        // Tangent stiffness at 1/6 strain (the W11 large-strain sample, lateral edges free),
+        // chosen so that the tension there is W11's: its rows at 0° and 90° give
+        // u: 2·232.03 − (2·40.65)²/(2·1052.84) = 460.92, v: 2·1051.56 − (2·40.92)²/(2·225.77)
+        // = 2088.3 N/m; its uniaxial tension (1 + e)·k·(e + e²/2) at e = 1/6 is 97.09 and
+        // 439.89 N/m; the law's, e·(k_small + k_large)/2, matches at k_large = 2T/e − k_small
+        // = 754.6 and 3,252 N/m [D]: 1.8× and 1.6× the small-strain values.
+        large_strain_n_m: Some([754.6, 3252.0]),
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "W11 11oz-black-denim [M/D]; bending agrees with KES denim [M→D]",
@@ -113,6 +124,7 @@ pub const PRESETS: &[FabricPreset] = &[
         shear_stiffness_n_m: 6.4,
         // One class median, no direction [P].
         strip_bending_n_m: [2.6e-6, 2.6e-6, 2.6e-6],
+        large_strain_n_m: None,
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "density vendor [low]; stretch ppf note [2]; bending Feng 2022 < 0.1 kg/m² [P]",
@@ -133,6 +145,7 @@ pub const PRESETS: &[FabricPreset] = &[
         // Strips along u, on the bias, along v: the 90°, 45° and 0° hinge rows /4: 31.283e-6,
         // 40.659e-6, 51.714e-6 → 7.82e-6, 1.016e-5, 1.293e-5 N·m [D].
         strip_bending_n_m: [7.82e-6, 1.016e-5, 1.293e-5],
+        large_strain_n_m: None,
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "W11 white-dots-on-blk (100 % polyester tablecloth) [M/D]",
@@ -155,6 +168,11 @@ pub const PRESETS: &[FabricPreset] = &[
         // Strips along u, on the bias, along v: the 90°, 45° and 0° hinge rows /4: 14.268e-6,
         // 24.750e-6, 23.192e-6 → 3.57e-6, 6.19e-6, 5.80e-6 N·m [D].
         strip_bending_n_m: [3.57e-6, 6.19e-6, 5.80e-6],
+        // Tangent stiffness at 1/6 strain, as for denim: W11 rows at 0° and 90° give u:
+        // 2·46.365 − (2·53.695)²/(2·261.014) = 70.64, v: 2·405.873 − (2·85.849)²/(2·127.444)
+        // = 696.1 N/m; tension at 1/6: 14.88 and 146.6 N/m; k_large = 2T/e − k_small =
+        // 157.9 and 1,717 N/m [D]: 7.6× and 40× the small-strain values.
+        large_strain_n_m: Some([157.9, 1716.6]),
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "W11 gray-interlock (60/40 cotton/PES knit) [M/D]",
@@ -177,6 +195,7 @@ pub const PRESETS: &[FabricPreset] = &[
         // Strips: the class medians warp 2.0e-5 and weft 1.5e-5; no bias value was measured, so
         // the bias takes their geometric mean, 1.73e-5 N·m [P].
         strip_bending_n_m: [2.0e-5, 1.73e-5, 1.5e-5],
+        large_strain_n_m: None,
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "density assumed; stretch FAST note [2]; bending Feng 2022 0.2–0.3 kg/m² [P]",
@@ -199,6 +218,7 @@ pub const PRESETS: &[FabricPreset] = &[
         shear_stiffness_n_m: 1.925e4,
         // Leather has no weave: the same rigidity every way [P].
         strip_bending_n_m: [1.73e-5, 1.73e-5, 1.73e-5],
+        large_strain_n_m: None,
         // Modelling choice: no measured source.
         damping_ratio: 0.05,
         source: "density Unreal [low]; stretch Efendioglu via ppf [2]; bending Feng 2022 [P]",
@@ -373,6 +393,49 @@ mod tests {
             let stiffer = p.warp_stiffness_n_m.max(p.weft_stiffness_n_m);
             assert!(p.shear_stiffness_n_m < 0.05 * stiffer, "{name}");
         }
+    }
+
+    #[test]
+    fn large_strain_stiffness_reproduces_w11_s_tension_at_one_sixth() {
+        // The W11 large-strain rows at principal directions 0° (along u) and 90° (along v),
+        // [k0, k1, k2] / 2 as printed; the lateral-free stiffness of each, the fitted model's
+        // uniaxial tension (1 + e)·k·(e + e²/2) at e = 1/6 (second Piola–Kirchhoff stress on
+        // the Green strain, times the stretch), and the tangent the law's trapezoid needs to
+        // reach it: k_large = 2T/e − k_small.
+        let e = 1.0 / 6.0;
+        let free_u = |r: [f64; 3]| 2.0 * (r[0] - r[1] * r[1] / r[2]);
+        let free_v = |r: [f64; 3]| 2.0 * (r[2] - r[1] * r[1] / r[0]);
+        let large = |k_free: f64, small: f64| {
+            let tension = (1.0 + e) * k_free * (e + 0.5 * e * e);
+            2.0 * tension / e - small
+        };
+        let rows = [
+            (
+                "denim",
+                [232.027634, 40.646339, 1052.84289],
+                [225.767487, 40.917892, 1051.55712],
+            ),
+            (
+                "jersey",
+                [46.364765, 53.694656, 261.013855],
+                [127.443810, 85.848587, 405.872833],
+            ),
+        ];
+        for (name, along_u, along_v) in rows {
+            let p = get(name);
+            let [warp, weft] = p.large_strain_n_m.expect("measured");
+            let u = large(free_u(along_u), p.warp_stiffness_n_m);
+            let v = large(free_v(along_v), p.weft_stiffness_n_m);
+            // The presets carry four or five digits.
+            assert!(close(warp, u, 1e-3), "{name} warp: {warp} vs {u}");
+            assert!(close(weft, v, 1e-3), "{name} weft: {weft} vs {v}");
+        }
+        // Only the W11 fabrics whose large-strain samples are not at the rig's ceiling.
+        let measured: Vec<_> = (PRESETS.iter())
+            .filter(|p| p.large_strain_n_m.is_some())
+            .map(|p| p.name)
+            .collect();
+        assert_eq!(measured, ["denim", "jersey"]);
     }
 
     #[test]

@@ -322,6 +322,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         euler_onset,
         membrane_onset,
         buckled_fraction,
+        stiffening: scene.fabric.stiffening(),
         // Friction is soft while a garment is being sewn; the run switches to each body's
         // slip speed once every seam is closed (see `phase_params`).
         bodies: bodies::body_params(&model, &scene.bodies, garment.is_some()),

@@ -168,6 +168,35 @@ fn parity_solve_stages_membrane_buckling_tshirt() {
     );
 }
 
+/// The T-shirt as a cotton membrane (warp at 30°) that stiffens in tension (its large-strain
+/// tangents twice its warp and weft, `common::STIFFENING`): perturbed by 5 mm, many conditions are stretched
+/// within the growth and some beyond it, where the force, the Hessian's axial (tangent) and
+/// transverse (tension over |w|) terms and the line search's energy change take the
+/// stiffening law.
+#[test]
+fn parity_solve_stages_membrane_stiffening_tshirt() {
+    let Some(ctx) = gpu() else { return };
+    let fabric = format!("{}\n{}", common::MEMBRANE_GRAIN_30, common::STIFFENING);
+    let scene = common::scene_with_fabric("scenes/tshirt_drape_cotton.toml", &fabric);
+    let (prep, state, step) = tshirt_with(scene);
+    let (within, beyond) = common::stiffened_conditions(&prep, &state.positions);
+    let conditions = 2 * prep.model.membranes.len();
+    assert!(
+        within * 5 > conditions && beyond > 0,
+        "{within} within, {beyond} beyond of {conditions}"
+    );
+    let single = SolveOptions {
+        small_rows: u32::MAX,
+        cached_rows: 0,
+    };
+    let g = GpuSolver::with_options(ctx, &prep.model, prep.params, &prep.plan, 1, single);
+    check_stages(
+        "membrane stiffening tshirt",
+        g.unwrap(),
+        Case::new(prep, state, step),
+    );
+}
+
 /// The pinched cloth as a cotton membrane (warp at 30°): the membrane's constant stiffness in
 /// the contact stiffness, with contact and friction.
 #[test]
@@ -273,7 +302,7 @@ struct SecantJitter {
 }
 
 impl Case {
-    /// A buckled element's axial stiffness is the secant T(s)/s (`CompressionLaw::axial`),
+    /// A buckled element's axial stiffness is the secant T(s)/s (`StretchLaw::axial`),
     /// whose derivative in s is k·o·(1 − r)/s² (o the onset, r the buckled fraction, |s| ≥ o):
     /// the rounding δs of the stretch moves it by Jₑ = k·o·(1 − r)·δs/s², up to k·δs/o, where
     /// the linear law's k does not move at all. The stretch rounds a few times the length it is

@@ -231,12 +231,14 @@ fn membrane_of(fabric: &crate::scene::Fabric) -> Orthotropic {
         weft: p.weft_stiffness_n_m as f32,
         shear: p.shear_stiffness_n_m as f32,
         bending: None,
+        large_strain: None,
     });
     (fabric.membrane.or(from_preset)).unwrap_or(Orthotropic {
         warp: k,
         weft: k,
         shear: 0.1 * k,
         bending: None,
+        large_strain: None,
     })
 }
 
