@@ -564,6 +564,45 @@ fn the_dart_fitted_pencil_skirt_rests_sewn_out_of_the_body() {
     assert!(f("last_frame_max_edge_strain") <= 0.1, "{summary:#}");
 }
 
+/// The cotton T-shirt scene in the jersey preset as the orthotropic membrane, `tension` =
+/// `tension` ("linear" or "stiffening"), written beside the run (its fixture paths made
+/// absolute), and its run on the CPU path.
+fn run_jersey_shirt(tension: &str) -> serde_json::Value {
+    let out = out_dir(&format!("jersey_{tension}"));
+    std::fs::create_dir_all(&out).unwrap();
+    let shipped = common::fixture("scenes/tshirt_drape_cotton.toml");
+    let fixtures = shipped.parent().unwrap().parent().unwrap();
+    let text = std::fs::read_to_string(&shipped).unwrap();
+    let fabric = format!("preset = \"jersey\"\nmodel = \"membrane\"\ntension = \"{tension}\"");
+    let text = (text.replace("preset = \"cotton\"", &fabric))
+        .replace("\"../", &format!("\"{}/", fixtures.display()));
+    let scene = out.join("scene_jersey.toml");
+    std::fs::write(&scene, text).unwrap();
+    let run = out.join("run");
+    let r = drapekit(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn a_stiffening_jersey_shirt_sews_where_the_linear_knit_stretches() {
+    // The knit's small-strain stiffness (20.7 and 42.9 N/m) stretches 12% over a hundredth of
+    // the shirt's threads and leaves two seams open (measured: the converged solve, 3e-5 of the
+    // weight); stiffening as W11 measured it (to 158 and 1,717 N/m by 1/6) it rests sewn with
+    // 6.1% there. The bound, 9%, lies between the two: a law that did not stiffen fails it.
+    let summary = run_jersey_shirt("stiffening");
+    assert_rests_sewn_outside_the_body("jersey stiffening", &summary);
+    let p99 = summary["last_frame_thread_strain"]["p99"].as_f64().unwrap();
+    assert!(p99 <= 0.09, "{summary:#}");
+}
+
 #[test]
 fn the_5_mm_shirts_rest_sewn_out_of_the_body_after_their_coarse_start() {
     // The shipped 5 mm T-shirts (37k particles), with linear springs and with springs that
