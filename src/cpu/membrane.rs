@@ -17,9 +17,9 @@
 //! With `tension = "stiffening"` each stretch condition's tangent stiffness rises with its
 //! strain (`stretch_law`), as the measured curves do (Wang et al. 2011).
 //!
-//! Known limits: the shear condition is linear; buckling acts on the warp and the weft conditions each, not on the principal
-//! compression (shear is linear); large shear couples with stretch through w_u·w_v =
-//! |w_u||w_v|cos.
+//! Known limits: the shear condition is linear; buckling acts on the warp and the weft
+//! conditions each, not on the principal compression; large shear couples with stretch through
+//! w_u·w_v = |w_u||w_v|cos.
 
 use super::grain;
 use super::stretch_law::StretchLaw;

@@ -371,13 +371,20 @@ impl ClothModel {
     /// Explicit Euler on a damped oscillator needs ω·dt < 2ζ with ζ = γ/(2ω), i.e.
     /// dt < γ/ω²; with no damping at all it has no stable step and `None` is returned.
     pub fn stable_dt(&self, integrator: u32, air_damping: f32) -> Option<f32> {
-        self.stable_step(integrator, air_damping).map(|(dt, _)| dt)
+        self.stable_step(integrator, air_damping, [1.0; 2])
+            .map(|(dt, _)| dt)
     }
 
     /// `stable_dt` and what sets it: `"stretch"` (springs or membrane), `"seam"` or `"bending"`
     /// (the largest term of the fastest particle's Gershgorin sum), or `"damping"` (the damping
-    /// rate bound).
-    pub fn stable_step(&self, integrator: u32, air_damping: f32) -> Option<(f32, &'static str)> {
+    /// rate bound). A membrane that stiffens in tension is taken at its stiffest, its warp and
+    /// weft stiffness times `membrane_tangent` (`scene::Fabric::tangent_ratio`; 1 when linear).
+    pub fn stable_step(
+        &self,
+        integrator: u32,
+        air_damping: f32,
+        membrane_tangent: [f32; 2],
+    ) -> Option<(f32, &'static str)> {
         let n = self.len();
         let mut k_sum = vec![0.0f32; n];
         let mut c_sum = vec![0.0f32; n];
@@ -427,14 +434,18 @@ impl ClothModel {
             let (a, b) = m.coefficients();
             let [ku, kv, ks, tau] = m.stiffness;
             let g = |r: usize| (a[r] * a[r] + b[r] * b[r]).sqrt();
-            for r in 0..3 {
-                let row: f32 = (0..3)
+            // The damping acts with the small-strain stiffness (`cpu::membrane`).
+            let row = |r: usize, [ku, kv]: [f32; 2]| -> f32 {
+                (0..3)
                     .map(|s| ku * (a[r] * a[s]).abs() + kv * (b[r] * b[s]).abs() + ks * g(r) * g(s))
-                    .sum();
+                    .sum()
+            };
+            let stiffest = [ku * membrane_tangent[0], kv * membrane_tangent[1]];
+            for r in 0..3 {
                 let v = m.v[r] as usize;
-                k_sum[v] += 0.5 * row;
-                parts[v][0] += 0.5 * row;
-                c_sum[v] += 0.5 * tau * row;
+                k_sum[v] += 0.5 * row(r, stiffest);
+                parts[v][0] += 0.5 * row(r, stiffest);
+                c_sum[v] += 0.5 * tau * row(r, [ku, kv]);
             }
         }
         let mut omega_sq_max = 0.0f32;

@@ -17,7 +17,7 @@ pub struct FabricLook {
 
 /// Wovens are stiff once their crimp is pulled out: denim reaches the KES tensile test's
 /// maximum load (500 gf/cm) at 4.7–5.7% strain (EMT of six denims). Knits stretch far more:
-/// a cotton interlock stiffens twelvefold by 16.7% strain (Wang et al. 2011), so 20% is the end
+/// a cotton interlock's weft stiffness entry grows twelvefold by 16.7% strain (Wang et al. 2011), so 20% is the end
 /// of its working range. Garment leather breaks at about 15% elongation (ISO 3376, quoted
 /// by ppf). The sources are the fabric presets' (docs/src/fabrics.md).
 pub const LOOKS: [FabricLook; 7] = [

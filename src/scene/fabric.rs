@@ -110,16 +110,26 @@ impl Fabric {
         }
     }
 
-    /// The stiffest stretch the cloth has, in N/m (the springs', or the membrane's stiffer
-    /// axis): what the stable-step and memory estimates take.
+    /// The membrane's largest tangent stiffness over its small-strain one, along the warp and
+    /// the weft: k_e/k where it stiffens, else 1 (the stable-step estimate's factor).
+    pub fn tangent_ratio(&self) -> [f32; 2] {
+        match self.membrane {
+            Some(Orthotropic {
+                warp,
+                weft,
+                large_strain: Some([large_warp, large_weft]),
+                ..
+            }) => [(large_warp / warp).max(1.0), (large_weft / weft).max(1.0)],
+            _ => [1.0; 2],
+        }
+    }
+
+    /// The stiffest small-strain stretch the cloth has, in N/m (the springs', or the membrane's
+    /// stiffer axis): what the seams' default stiffness and the scale checks take (the
+    /// stable-step estimate adds a stiffening membrane's `tangent_ratio`).
     pub fn stiffest_stretch(&self) -> f32 {
         match self.membrane {
-            Some(m) => {
-                let large = m.large_strain.unwrap_or([0.0; 2]);
-                (m.warp.max(m.weft).max(self.stretch_stiffness))
-                    .max(large[0])
-                    .max(large[1])
-            }
+            Some(m) => m.warp.max(m.weft).max(self.stretch_stiffness),
             None => self.stretch_stiffness,
         }
     }
@@ -293,6 +303,28 @@ fn parse_tension(
         },
         Some("stiffening") => {
             let measured = preset.and_then(|p| p.large_strain_n_m);
+            // A preset's large-strain value belongs to its own small-strain one.
+            let small = [
+                ("warp_stiffness_n_m", f.warp_stiffness_n_m, keys[0]),
+                ("weft_stiffness_n_m", f.weft_stiffness_n_m, keys[1]),
+            ];
+            if let Some((small_key, _, (key, _))) =
+                (small.iter()).find(|(_, given, (_, large))| given.is_some() && large.is_none())
+            {
+                if measured.is_some() {
+                    return Err(c.err(
+                        "fabric",
+                        small_key,
+                        format!(
+                            "{small_key} is given, but the preset's {key} was measured with the \
+                             preset's own {small_key}"
+                        ),
+                        format!(
+                            "give {key} too (the tangent at 1/6 strain), or remove {small_key}"
+                        ),
+                    ));
+                }
+            }
             let mut v = [0.0f32; 2];
             for (i, (out, (key, given))) in v.iter_mut().zip(keys).enumerate() {
                 let value = given.or(measured.map(|m| m[i])).ok_or_else(|| {
@@ -405,13 +437,16 @@ fn parse_membrane(
     ];
     match f.model.as_deref() {
         None | Some("springs") => {
-            if f.tension.as_deref().is_some_and(|t| t != "linear") {
-                return Err(c.err(
+            match f.tension.as_deref() {
+                None | Some("linear") => {}
+                Some("stiffening") => return Err(c.err(
                     "fabric",
                     "tension",
                     "tension = \"stiffening\" is a law of the membrane, but the fabric is springs",
                     "add model = \"membrane\" to [fabric], or remove the key",
-                ));
+                )),
+                // An unknown value: its own error, with the values there are.
+                Some(_) => return parse_tension(c, f, preset).map(|_| None),
             }
             let mut membrane_keys = keys.iter().chain(&bending_keys).chain(&tension_keys);
             if let Some((key, _, _)) = membrane_keys.find(|k| k.1.is_some()) {

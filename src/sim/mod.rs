@@ -185,7 +185,11 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     let stable_step = if implicit {
         None
     } else {
-        model.stable_step(s.integrator, scene.air_damping)
+        model.stable_step(
+            s.integrator,
+            scene.air_damping,
+            scene.fabric.tangent_ratio(),
+        )
     };
     let stable_dt = stable_step.map(|(dt, _)| dt);
     // What sets the substep: the scene, or the stability bound's binding term (body speed
