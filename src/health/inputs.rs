@@ -56,6 +56,19 @@ pub const WEFT: MeasuredRange = MeasuredRange {
     ..STRETCH
 };
 
+/// A stiffening membrane's large-strain tangents along the warp and the weft: the same
+/// measured range (the knit's weft at 1/6 strain, 1,717 N/m, lies inside it).
+pub const WARP_LARGE: MeasuredRange = MeasuredRange {
+    key: "warp_large_strain_stiffness_n_m",
+    ..STRETCH
+};
+
+/// See [`WARP_LARGE`].
+pub const WEFT_LARGE: MeasuredRange = MeasuredRange {
+    key: "weft_large_strain_stiffness_n_m",
+    ..STRETCH
+};
+
 /// In-plane shear: from a polyester jacket fabric's 7.2 N/m (Wang et al. 2011, k3/4) to
 /// garment leather's isotropic E·t/3 = 1.9e4 N/m (the leather preset's proxy).
 pub const SHEAR: MeasuredRange = MeasuredRange {
@@ -152,6 +165,14 @@ pub fn fabric_warnings(scene: &Scene, fabric: &Fabric) -> Vec<String> {
         (WARP, m.map(|m| m.warp as f64)),
         (WEFT, m.map(|m| m.weft as f64)),
         (SHEAR, m.map(|m| m.shear as f64)),
+        (
+            WARP_LARGE,
+            m.and_then(|m| m.large_strain).map(|l| l[0] as f64),
+        ),
+        (
+            WEFT_LARGE,
+            m.and_then(|m| m.large_strain).map(|l| l[1] as f64),
+        ),
         (WARP_BENDING, m.and_then(|m| m.bending).map(|b| b[0] as f64)),
         (WEFT_BENDING, m.and_then(|m| m.bending).map(|b| b[1] as f64)),
     ];
@@ -365,6 +386,18 @@ mod tests {
         assert_eq!(w.len(), 1, "{w:?}");
         assert!(
             w[0].contains("fabric.weft_large_strain_stiffness_n_m: the weft's large-strain stiffness 30 N/m is below its small-strain 42.9"),
+            "{}",
+            w[0]
+        );
+        // A large-strain tangent a million times the jersey's: past any fabric's stretch.
+        let s = scene(
+            "preset = \"jersey\"\nmodel = \"membrane\"\ntension = \"stiffening\"\n\
+             warp_large_strain_stiffness_n_m = 157900000",
+        );
+        let w = fabric_warnings(&s, &s.fabric);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].contains("fabric.warp_large_strain_stiffness_n_m: 1.58e8 N/m is above"),
             "{}",
             w[0]
         );
