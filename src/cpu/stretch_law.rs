@@ -25,8 +25,9 @@
 //! element's secant stiffness (`StretchLaw::axial`).
 //!
 //! Why stiffening: measured fabric stiffens as it stretches (Wang et al. 2011's knit carries 20
-//! times a linear membrane's tension across its weft at 17% strain). In tension the law's tangent stiffness rises linearly with the strain, k·(1 + g·s),
-//! from k at no strain to k·(1 + g·e) at the end strain e, and stays there: tension
+//! times a linear membrane's tension across its weft at 17% strain). In tension the law's
+//! tangent stiffness rises linearly with the strain, k·(1 + g·s), from k at no strain to
+//! k·(1 + g·e) at the end strain e, and stays there: tension
 //! k·(s + g·t·(s − t/2)) and energy k·(½s² + g·t·(s²/2 − t·s/2 + t²/6)), t = min(s, e). Both
 //! are C² up to e and C¹ there. The solves' Hessian takes the tangent: the energy is convex, so
 //! it is positive, and a Newton step from below overshoots at most onto the stiffer side, which

@@ -443,8 +443,9 @@ impl ClothModel {
             let stiffest = [ku * membrane_tangent[0], kv * membrane_tangent[1]];
             for r in 0..3 {
                 let v = m.v[r] as usize;
-                k_sum[v] += 0.5 * row(r, stiffest);
-                parts[v][0] += 0.5 * row(r, stiffest);
+                let stiffness = 0.5 * row(r, stiffest);
+                k_sum[v] += stiffness;
+                parts[v][0] += stiffness;
                 c_sum[v] += 0.5 * tau * row(r, [ku, kv]);
             }
         }

@@ -279,19 +279,24 @@ fn parse_tension(
     f: &RawFabric,
     preset: Option<&FabricPreset>,
 ) -> Result<Option<[f32; 2]>, InputError> {
-    let keys = [
+    // Each axis: its large-strain key and value, and its small-strain key and value.
+    let axes = [
         (
             "warp_large_strain_stiffness_n_m",
             f.warp_large_strain_stiffness_n_m,
+            "warp_stiffness_n_m",
+            f.warp_stiffness_n_m,
         ),
         (
             "weft_large_strain_stiffness_n_m",
             f.weft_large_strain_stiffness_n_m,
+            "weft_stiffness_n_m",
+            f.weft_stiffness_n_m,
         ),
     ];
     match f.tension.as_deref() {
-        None | Some("linear") => match keys.iter().find(|k| k.1.is_some()) {
-            Some((key, _)) => Err(c.err(
+        None | Some("linear") => match axes.iter().find(|a| a.1.is_some()) {
+            Some((key, ..)) => Err(c.err(
                 "fabric",
                 key,
                 format!(
@@ -303,15 +308,10 @@ fn parse_tension(
         },
         Some("stiffening") => {
             let measured = preset.and_then(|p| p.large_strain_n_m);
-            // A preset's large-strain value belongs to its own small-strain one.
-            let small = [
-                ("warp_stiffness_n_m", f.warp_stiffness_n_m, keys[0]),
-                ("weft_stiffness_n_m", f.weft_stiffness_n_m, keys[1]),
-            ];
-            if let Some((small_key, _, (key, _))) =
-                (small.iter()).find(|(_, given, (_, large))| given.is_some() && large.is_none())
-            {
-                if measured.is_some() {
+            let mut v = [0.0f32; 2];
+            for (i, (out, (key, given, small_key, small))) in v.iter_mut().zip(axes).enumerate() {
+                // A preset's large-strain value belongs to its own small-strain one.
+                if given.is_none() && small.is_some() && measured.is_some() {
                     return Err(c.err(
                         "fabric",
                         small_key,
@@ -324,9 +324,6 @@ fn parse_tension(
                         ),
                     ));
                 }
-            }
-            let mut v = [0.0f32; 2];
-            for (i, (out, (key, given))) in v.iter_mut().zip(keys).enumerate() {
                 let value = given.or(measured.map(|m| m[i])).ok_or_else(|| {
                     let fix = match preset {
                         Some(p) => format!(
