@@ -158,6 +158,24 @@ fn force_is_minus_the_energy_gradient() {
     force_is_minus_the_energy_gradient_with(&SimParams::default());
 }
 
+/// Conditions that buckle at 0.08 N·m of compression (1% on the cotton sheet's triangles),
+/// carrying 3% of their stiffness beyond.
+fn buckling() -> SimParams {
+    SimParams {
+        membrane_onset: 0.08,
+        buckled_fraction: 0.03,
+        ..Default::default()
+    }
+}
+
+/// Conditions that stiffen, g = 20 per unit strain up to e = 0.05: a tangent twice k at 5%.
+fn stiffening() -> SimParams {
+    SimParams {
+        stiffening: [20.0, 20.0, 0.05, 0.0],
+        ..Default::default()
+    }
+}
+
 /// The vertices whose force `force_is_minus_the_energy_gradient_with` checks, and its
 /// central-difference step (m).
 const GRADIENT_VERTICES: [usize; 4] = [0, 10, 40, 80];
@@ -170,11 +188,7 @@ const GRADIENT_STEP: f32 = 1e-5;
 /// none of their conditions lies within the strain 2·|c|·h that its ±h moves reach.
 #[test]
 fn force_is_minus_the_energy_gradient_with_buckling() {
-    let p = SimParams {
-        membrane_onset: 0.08,
-        buckled_fraction: 0.03,
-        ..Default::default()
-    };
+    let p = buckling();
     let (model, x) = deformed(4e-3, 7);
     let zero = vec![Vec4::ZERO; x.len()];
     let csr = model.membrane_csr();
@@ -314,10 +328,7 @@ fn hessian_blocks_are_the_force_derivative_under_pure_warp_stretch() {
 /// block is the tangent and the transverse one the tension over |w|.
 #[test]
 fn hessian_blocks_are_the_force_derivative_of_a_stiffening_membrane() {
-    let p = SimParams {
-        stiffening: [20.0, 20.0, 0.05, 0.0],
-        ..Default::default()
-    };
+    let p = stiffening();
     for stretch in [0.03, 0.08] {
         hessian_blocks_are_the_force_derivative_under_warp_stretch(&p, stretch);
     }
@@ -730,19 +741,10 @@ fn every_triangle_s_hessian_is_positive_semi_definite_when_sheared_and_compresse
     // the largest entry), which moves its eigenvalues by at most 9 times that: the shift
     // 1e-5·max|H| separates rounding from a dropped-term mistake, whose negative eigenvalues
     // are of the order of the tension (~1e-1 of the stiffness) or the shear stiffness.
-    let buckling = SimParams {
-        membrane_onset: 0.08,
-        buckled_fraction: 0.03,
-        ..Default::default()
-    };
-    let stiffening = SimParams {
-        stiffening: [20.0, 20.0, 0.05, 0.0],
-        ..Default::default()
-    };
     for (name, p) in [
         ("linear", SimParams::default()),
-        ("buckling", buckling),
-        ("stiffening", stiffening),
+        ("buckling", buckling()),
+        ("stiffening", stiffening()),
     ] {
         for seed in [1, 2, 3] {
             let (model, x) = deformed(0.01, seed);
