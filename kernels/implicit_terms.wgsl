@@ -2,7 +2,7 @@
 // diagonal block (and, composed into `assemble`, the off-diagonal blocks of its row), the
 // vertex's constant stiffness, the contact filter and the force residual. Composed into every
 // kernel that evaluates the potential (contact_planes, vbd_solve, assemble, correction_filter,
-// line_energy, force_residual). CPU twin: src/cpu/implicit_terms.rs, where the terms and their
+// line_energy, line_slopes, force_residual). CPU twin: src/cpu/implicit_terms.rs, where the terms and their
 // choices are documented; the functions here follow it line for line, in the same order of
 // sums.
 //
@@ -27,6 +27,19 @@ const CONTACT_RATIO: f32 = 100.0;
 // (cpu: CONTACT_SLACK_FRACTION).
 const CONTACT_SLACK_FRACTION: f32 = 0.01;
 
+// section trial
+// Vertex j's displacement where the terms are evaluated: the full step D + c of a Newton
+// correction (line_slopes; cpu: the displacements line_slopes builds).
+fn d_at(j: u32) -> vec3<f32> {
+    return disp[j].xyz + correction[j].xyz;
+}
+// else trial
+// Vertex j's displacement where the terms are evaluated: the iterate D.
+fn d_at(j: u32) -> vec3<f32> {
+    return disp[j].xyz;
+}
+// end trial
+
 fn prev(i: u32) -> vec4<f32> {
     return textureLoad(pos, texel(i), 0);
 }
@@ -37,7 +50,7 @@ fn is_free(j: u32) -> bool {
 
 // Vertex i's world position at the iterate.
 fn world(i: u32) -> vec3<f32> {
-    return prev(i).xyz + disp[i].xyz;
+    return prev(i).xyz + d_at(i);
 }
 
 // Vertex i's plane for body b.
@@ -122,7 +135,7 @@ fn vertex_system(i: u32, bodies: u32, assembling: bool) -> VertexSystem {
         return VertexSystem(vec3<f32>(0.0), mat3x3<f32>());
     }
     let mass = 1.0 / p.w;
-    let di = disp[i].xyz;
+    let di = d_at(i);
     let inertia = mass / (h * h);
     let air = params.air_damping * mass / h;
     var f = -inertia * (di - inertial[i].xyz) - air * di;
@@ -134,7 +147,7 @@ fn vertex_system(i: u32, bodies: u32, assembling: bool) -> VertexSystem {
         let s = unpack_spring(textureLoad(springs, texel(k), 0));
         let j = s.other;
         let start = p.xyz - prev(j).xyz;
-        let change = di - disp[j].xyz;
+        let change = di - d_at(j);
         let e = start + change;
         let len = length(e);
         let start_len = length(start);
@@ -196,7 +209,7 @@ fn contact_filter(i: u32) -> Filter {
     if (prev(i).w == 0.0) {
         return out;
     }
-    let di = disp[i].xyz;
+    let di = d_at(i);
     for (var b = 0u; b < params.num_bodies; b = b + 1u) {
         let n = plane(b, i).xyz;
         if (touching(b, i, di)) {
@@ -267,10 +280,10 @@ fn hinge_frame_at(hinge: Hinge, c: array<vec3<f32>, 4>, a: f32) -> HingeFrame {
     let v = hinge.v;
     return hinge_frame(
         hinge.stiffness,
-        prev(v.x).xyz + (disp[v.x].xyz + a * c[0]),
-        prev(v.y).xyz + (disp[v.y].xyz + a * c[1]),
-        prev(v.z).xyz + (disp[v.z].xyz + a * c[2]),
-        prev(v.w).xyz + (disp[v.w].xyz + a * c[3]),
+        prev(v.x).xyz + (d_at(v.x) + a * c[0]),
+        prev(v.y).xyz + (d_at(v.y) + a * c[1]),
+        prev(v.z).xyz + (d_at(v.z) + a * c[2]),
+        prev(v.w).xyz + (d_at(v.w) + a * c[3]),
     );
 }
 
@@ -324,7 +337,7 @@ fn seam_gap(s: Seam) -> SeamGap {
     let a = prev(s.v.x).xyz;
     let b0 = prev(s.v.y).xyz;
     let b1 = prev(s.v.z).xyz;
-    let opening = (1.0 - w) * disp[s.v.y].xyz + w * disp[s.v.z].xyz - disp[s.v.x].xyz;
+    let opening = (1.0 - w) * d_at(s.v.y) + w * d_at(s.v.z) - d_at(s.v.x);
     let start = (1.0 - w) * (b0 - a) + w * (b1 - a);
     return SeamGap(start + opening, opening);
 }
@@ -420,8 +433,8 @@ fn membrane_start_image(m: Membrane, c: vec3<f32>) -> vec3<f32> {
 
 // The same combination of the displacements D.
 fn membrane_disp_image(m: Membrane, c: vec3<f32>) -> vec3<f32> {
-    let d0 = disp[m.v.x].xyz;
-    return c.y * (disp[m.v.y].xyz - d0) + c.z * (disp[m.v.z].xyz - d0);
+    let d0 = d_at(m.v.x);
+    return c.y * (d_at(m.v.y) - d0) + c.z * (d_at(m.v.z) - d0);
 }
 
 // A membrane in the step: coefficients a (of w_u) and b (of w_v), the images at the start of

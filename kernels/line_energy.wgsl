@@ -2,8 +2,10 @@
 // search's step lengths, counted at each vertex (its own terms: inertia, air damping, contact,
 // friction; and the elements it owns: a spring at its lower-numbered end, a hinge, a membrane
 // triangle and a seam pair at their first vertex) and summed per workgroup by tree_sum (xyz:
-// one step length each). Each change is a difference of nearby quantities, not
-// G(x + αc) − G(x), so it keeps its precision however large G is. CPU twin: line_energy in src/cpu/line_energy.rs and
+// one step length each; w: the scale of the full step's change, which bounds its rounding).
+// Each change is a difference of nearby quantities, not G(x + αc) − G(x), so it keeps its
+// precision however large G is; a hinge's energies and friction's potentials are differenced,
+// and their two values count in the scale. CPU twin: line_energy in src/cpu/line_energy.rs and
 // Implicit::energy_change in src/cpu/implicit_terms.rs.
 
 @group(0) @binding(21) var<storage, read> correction: array<vec4<f32>>;
@@ -22,7 +24,7 @@ fn friction_f0(s: f32, eps: f32) -> f32 {
 }
 
 // Contact and friction's share of energy_change at free vertex i.
-fn contact_change(i: u32, di: vec3<f32>, ci: vec3<f32>, out: ptr<function, vec3<f32>>) {
+fn contact_change(i: u32, di: vec3<f32>, ci: vec3<f32>, out: ptr<function, vec4<f32>>) {
     if (params.num_bodies == 0u) {
         return;
     }
@@ -41,19 +43,31 @@ fn contact_change(i: u32, di: vec3<f32>, ci: vec3<f32>, out: ptr<function, vec3<
             let depth2 = depth - a * dot(n, ci);
             let p0 = max(depth, 0.0);
             let p1 = max(depth2, 0.0);
-            (*out)[k] = (*out)[k] + 0.5 * k_c * (p1 - p0) * (p1 + p0);
+            let v = 0.5 * k_c * (p1 - p0) * (p1 + p0);
+            (*out)[k] = (*out)[k] + v;
+            add_scale(k, abs(v), out);
             if (lambda > 0.0 && body.friction > 0.0) {
                 let s0 = length(sl);
                 let s1 = length(sl + a * dslip);
                 (*out)[k] = (*out)[k] + body.friction * lambda * (friction_f0(s1, eps) - friction_f0(s0, eps));
+                let e0 = body.friction * lambda * friction_f0(s0, eps);
+                let e1 = body.friction * lambda * friction_f0(s1, eps);
+                add_scale(k, e0 + e1, out);
             }
         }
     }
 }
 
-fn energy_change(i: u32) -> vec3<f32> {
+// Adds a term's size to the scale (w) for the full step (k = 0).
+fn add_scale(k: u32, size: f32, out: ptr<function, vec4<f32>>) {
+    if (k == 0u) {
+        (*out).w = (*out).w + size;
+    }
+}
+
+fn energy_change(i: u32) -> vec4<f32> {
     let h = params.dt;
-    var out = vec3<f32>(0.0);
+    var out = vec4<f32>(0.0);
     let p = prev(i);
     let di = disp[i].xyz;
     let ci = correction[i].xyz;
@@ -65,7 +79,9 @@ fn energy_change(i: u32) -> vec3<f32> {
         for (var k = 0u; k < 3u; k = k + 1u) {
             let a = LINE_ALPHAS[k];
             let sq = a * a * dot(ci, ci);
-            out[k] = out[k] + (inertia * (a * dot(ci, to_target) + 0.5 * sq) + air * (a * dot(ci, di) + 0.5 * sq));
+            let v = inertia * (a * dot(ci, to_target) + 0.5 * sq) + air * (a * dot(ci, di) + 0.5 * sq);
+            out[k] = out[k] + v;
+            add_scale(k, abs(v), &out);
         }
         contact_change(i, di, ci, &out);
     }
@@ -101,7 +117,9 @@ fn energy_change(i: u32) -> vec3<f32> {
             let law = StretchLaw(params.euler_onset / rest, params.buckled_fraction, 0.0, 0.0);
             let stretch = law_energy_change(law, s.stiffness, len - rest, len2 - rest, len + len2 - 2.0 * rest, dl);
             let dn = a * dot(n, dc);
-            out[k] = out[k] + (stretch + 0.5 * s.damping / h * dn * (2.0 * dot(n, change) + dn));
+            let v = stretch + 0.5 * s.damping / h * dn * (2.0 * dot(n, change) + dn);
+            out[k] = out[k] + v;
+            add_scale(k, abs(v), &out);
         }
     }
     add_hinge_changes(i, &out);
@@ -119,7 +137,7 @@ fn hinge_energy(hinge: Hinge, c: array<vec3<f32>, 4>, a: f32) -> f32 {
     return hinge.rest_weight * hinge_psi(t.sin_half, hinge.rest_sin_half);
 }
 
-fn add_hinge_changes(i: u32, out: ptr<function, vec3<f32>>) {
+fn add_hinge_changes(i: u32, out: ptr<function, vec4<f32>>) {
     let first = textureLoad(hinge_offsets, texel(i), 0).x;
     let end = textureLoad(hinge_offsets, texel(i + 1u), 0).x;
     for (var t = first; t < end; t = t + 1u) {
@@ -132,12 +150,14 @@ fn add_hinge_changes(i: u32, out: ptr<function, vec3<f32>>) {
         let c = array<vec3<f32>, 4>(correction[v.x].xyz, correction[v.y].xyz, correction[v.z].xyz, correction[v.w].xyz);
         let before = hinge_energy(hinge, c, 0.0);
         for (var k = 0u; k < 3u; k = k + 1u) {
-            (*out)[k] = (*out)[k] + (hinge_energy(hinge, c, LINE_ALPHAS[k]) - before);
+            let after = hinge_energy(hinge, c, LINE_ALPHAS[k]);
+            (*out)[k] = (*out)[k] + (after - before);
+            add_scale(k, abs(after) + abs(before), out);
         }
     }
 }
 // else bending
-fn add_hinge_changes(i: u32, out: ptr<function, vec3<f32>>) {}
+fn add_hinge_changes(i: u32, out: ptr<function, vec4<f32>>) {}
 // end bending
 
 // section membrane
@@ -149,7 +169,7 @@ fn membrane_correction_image(m: Membrane, c: vec3<f32>) -> vec3<f32> {
 
 // Each membrane's change, counted at its first vertex (cpu: the membrane loop of
 // Implicit::energy_change).
-fn add_membrane_changes(i: u32, out: ptr<function, vec3<f32>>) {
+fn add_membrane_changes(i: u32, out: ptr<function, vec4<f32>>) {
     let h = params.dt;
     let first = textureLoad(membrane_offsets, texel(i), 0).x;
     let end = textureLoad(membrane_offsets, texel(i + 1u), 0).x;
@@ -164,16 +184,18 @@ fn add_membrane_changes(i: u32, out: ptr<function, vec3<f32>>) {
         let dv = membrane_correction_image(m, st.b);
         for (var k = 0u; k < 3u; k = k + 1u) {
             let a = LINE_ALPHAS[k];
-            (*out)[k] = (*out)[k] + membrane_energy_change(st, m, a * du, a * dv, h);
+            let v = membrane_energy_change(st, m, a * du, a * dv, h);
+            (*out)[k] = (*out)[k] + v;
+            add_scale(k, abs(v), out);
         }
     }
 }
 // else membrane
-fn add_membrane_changes(i: u32, out: ptr<function, vec3<f32>>) {}
+fn add_membrane_changes(i: u32, out: ptr<function, vec4<f32>>) {}
 // end membrane
 
 // section seams
-fn add_seam_changes(i: u32, out: ptr<function, vec3<f32>>) {
+fn add_seam_changes(i: u32, out: ptr<function, vec4<f32>>) {
     let h = params.dt;
     let first = textureLoad(seam_offsets, texel(i), 0).x;
     let end = textureLoad(seam_offsets, texel(i + 1u), 0).x;
@@ -199,11 +221,12 @@ fn add_seam_changes(i: u32, out: ptr<function, vec3<f32>>) {
                 spring = 0.5 * s.stiffness * (o1 - o0) * (o1 + o0);
             }
             (*out)[k] = (*out)[k] + (damping + spring);
+            add_scale(k, abs(damping) + abs(spring), out);
         }
     }
 }
 // else seams
-fn add_seam_changes(i: u32, out: ptr<function, vec3<f32>>) {}
+fn add_seam_changes(i: u32, out: ptr<function, vec4<f32>>) {}
 // end seams
 
 @compute @workgroup_size(WORKGROUP_SIZE)
@@ -219,7 +242,7 @@ fn main(
     let i = particle_index(gid, groups);
     var lane = vec4<f32>(0.0);
     if (i < params.num_particles) {
-        lane = vec4<f32>(energy_change(i), 0.0);
+        lane = energy_change(i);
     }
     lanes[lid] = lane;
     let total = tree_sum(lid);

@@ -302,6 +302,9 @@ pub enum SolveOp {
     /// the step here (`line_search_from_full_step`, the same step), so that it sums the
     /// shorter steps only when the full one raises G.
     LineEnergy,
+    /// G's slopes along c at the iterate and at the full step (`line_slopes`; on the CPU,
+    /// computed by `LineEnergy` when the search needs them).
+    LineSlopes,
     /// The step length: the first trial that does not raise G (`line_search`; on the CPU,
     /// chosen by `LineEnergy`).
     LineSearch,
@@ -336,6 +339,7 @@ impl SolveOp {
             SolveOp::PcgStep => "pcg_step",
             SolveOp::CorrectionFilter => "correction_filter",
             SolveOp::LineEnergy => "line_energy",
+            SolveOp::LineSlopes => "line_slopes",
             SolveOp::LineSearch => "line_search",
             SolveOp::ApplyCorrection => "apply_correction",
             SolveOp::ForceResidual => "force_residual",
@@ -457,6 +461,7 @@ pub fn newton_correction(shape: SolveShape) -> Vec<SolveOp> {
     ops.extend([
         SolveOp::CorrectionFilter,
         SolveOp::LineEnergy,
+        SolveOp::LineSlopes,
         SolveOp::LineSearch,
         SolveOp::ApplyCorrection,
     ]);
@@ -477,6 +482,7 @@ pub fn newton_correction_block_jacobi(iterations: u32) -> Vec<SolveOp> {
     ops.extend([
         SolveOp::CorrectionFilter,
         SolveOp::LineEnergy,
+        SolveOp::LineSlopes,
         SolveOp::LineSearch,
         SolveOp::ApplyCorrection,
     ]);

@@ -190,6 +190,8 @@ pub struct Newton {
     pub scalars: PcgScalars,
     /// The line search's energy partials.
     pub energy: Vec<Vec4>,
+    /// The line search's slope partials.
+    pub slopes: Vec<Vec4>,
     /// The step length of each Newton step of the last substep.
     pub alphas: Vec<f32>,
 }
@@ -265,6 +267,7 @@ impl Vbd {
                 ap: vec![Vec4::ZERO; n],
                 scalars: PcgScalars::default(),
                 energy: vec![Vec4::ZERO; groups],
+                slopes: vec![Vec4::ZERO; groups],
                 alphas: Vec::new(),
                 structure,
             }
@@ -489,13 +492,16 @@ impl Newton {
             }
             SolveOp::CorrectionFilter => correction_filter(s, x, &mut self.correction),
             // The CPU chooses the step while it sums G's changes, the shorter steps only when
-            // the full one raises G: the same choice, at one step length's evaluation of each
-            // element instead of three when the full step is taken.
+            // the full one is not taken and the slopes only when a change is within its
+            // rounding: the same choice, at one step length's evaluation of each element
+            // instead of three and no forces at the full step when the full step is taken.
             SolveOp::LineEnergy => {
-                let alpha = line_search_from_full_step(s, x, &self.correction, &mut self.energy);
+                let partials = (&mut self.energy[..], &mut self.slopes[..]);
+                let (c, f) = (&self.correction, &self.force);
+                let alpha = line_search_from_full_step(s, x, c, f, partials);
                 self.alphas.push(alpha);
             }
-            SolveOp::LineSearch => {}
+            SolveOp::LineSlopes | SolveOp::LineSearch => {}
             SolveOp::ApplyCorrection => {
                 let alpha = self.alphas.last().copied().unwrap_or(0.0);
                 apply_correction(alpha, &self.correction, x);

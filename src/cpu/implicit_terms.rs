@@ -421,7 +421,23 @@ impl Implicit<'_> {
         c: &[Vec4],
         alphas: [f32; N],
     ) -> [f32; N] {
+        self.energy_change_and_scale(i, d, c, alphas).0
+    }
+
+    /// `energy_change`, and the size of what its first step length's change adds up: each
+    /// term's change, except where a term is a difference of two values that are not nearby
+    /// (a hinge's energies, friction's potentials), whose two values count. Each term rounds
+    /// a few times relative to its share of that size, so the sum of the sizes bounds the
+    /// change's rounding (`line_search`).
+    pub fn energy_change_and_scale<const N: usize>(
+        &self,
+        i: usize,
+        d: &[Vec4],
+        c: &[Vec4],
+        alphas: [f32; N],
+    ) -> ([f32; N], f32) {
         let p = self.params;
+        let mut scale = 0.0f32;
         let h = p.dt;
         let mut out = [0.0f32; N];
         let di = v3(d[i]);
@@ -431,12 +447,14 @@ impl Implicit<'_> {
             let inertia = mass / (h * h);
             let air = p.air_damping * mass / h;
             let to_target = di - v3(self.target[i]);
-            for (o, &a) in out.iter_mut().zip(&alphas) {
+            for (k, (o, &a)) in out.iter_mut().zip(&alphas).enumerate() {
                 let sq = a * a * ci.length_squared();
-                *o += inertia * (a * ci.dot(to_target) + 0.5 * sq)
+                let v = inertia * (a * ci.dot(to_target) + 0.5 * sq)
                     + air * (a * ci.dot(di) + 0.5 * sq);
+                *o += v;
+                scale += if k == 0 { v.abs() } else { 0.0 };
             }
-            self.contact_change(i, di, ci, alphas, &mut out);
+            self.contact_change(i, di, ci, alphas, (&mut out, &mut scale));
         }
 
         let (offsets, springs) = self.el.springs;
@@ -458,7 +476,7 @@ impl Implicit<'_> {
             };
             let rest = s.rest_length;
             let law = StretchLaw::spring(p, rest);
-            for (o, &a) in out.iter_mut().zip(&alphas) {
+            for (k, (o, &a)) in out.iter_mut().zip(&alphas).enumerate() {
                 let grow = 2.0 * a * e.dot(dc) + a * a * dc.length_squared();
                 let len2 = (e + a * dc).length();
                 // l' − l = (|e'|² − |e|²)/(l' + l): no cancellation of two lengths.
@@ -470,7 +488,9 @@ impl Implicit<'_> {
                 let sum = len + len2 - 2.0 * rest;
                 let stretch = law.energy_change(s.stiffness, len - rest, len2 - rest, sum, dl);
                 let dn = a * n.dot(dc);
-                *o += stretch + 0.5 * s.damping / h * dn * (2.0 * n.dot(change) + dn);
+                let v = stretch + 0.5 * s.damping / h * dn * (2.0 * n.dot(change) + dn);
+                *o += v;
+                scale += if k == 0 { v.abs() } else { 0.0 };
             }
         }
 
@@ -481,8 +501,14 @@ impl Implicit<'_> {
                     continue;
                 }
                 let before = self.hinge_energy(hinge, d, c, 0.0);
-                for (o, &a) in out.iter_mut().zip(&alphas) {
-                    *o += self.hinge_energy(hinge, d, c, a) - before;
+                for (k, (o, &a)) in out.iter_mut().zip(&alphas).enumerate() {
+                    let after = self.hinge_energy(hinge, d, c, a);
+                    *o += after - before;
+                    scale += if k == 0 {
+                        after.abs() + before.abs()
+                    } else {
+                        0.0
+                    };
                 }
             }
         }
@@ -498,8 +524,10 @@ impl Implicit<'_> {
                     super::membrane::image(m, &step.a, c),
                     super::membrane::image(m, &step.b, c),
                 ];
-                for (o, &a) in out.iter_mut().zip(&alphas) {
-                    *o += step.energy_change(p, m, [a * dw[0], a * dw[1]], h);
+                for (k, (o, &a)) in out.iter_mut().zip(&alphas).enumerate() {
+                    let v = step.energy_change(p, m, [a * dw[0], a * dw[1]], h);
+                    *o += v;
+                    scale += if k == 0 { v.abs() } else { 0.0 };
                 }
             }
         }
@@ -513,7 +541,7 @@ impl Implicit<'_> {
                 let (gap, opening) = self.seam_gap(s, d);
                 let dg = seam_combination(s, c);
                 let rest = rest_gap(s, p, self.step.time);
-                for (o, &a) in out.iter_mut().zip(&alphas) {
+                for (k, (o, &a)) in out.iter_mut().zip(&alphas).enumerate() {
                     let damping = 0.5 * s.damping / h
                         * (2.0 * a * opening.dot(dg) + a * a * dg.length_squared());
                     let spring = if rest <= 0.0 {
@@ -524,10 +552,15 @@ impl Implicit<'_> {
                         0.5 * s.stiffness * (o1 - o0) * (o1 + o0)
                     };
                     *o += damping + spring;
+                    scale += if k == 0 {
+                        damping.abs() + spring.abs()
+                    } else {
+                        0.0
+                    };
                 }
             }
         }
-        out
+        (out, scale)
     }
 
     /// Contact and friction's share of `energy_change` at free vertex `i`.
@@ -537,7 +570,7 @@ impl Implicit<'_> {
         di: Vec3,
         ci: Vec3,
         alphas: [f32; N],
-        out: &mut [f32; N],
+        (out, scale): (&mut [f32; N], &mut f32),
     ) {
         let p = self.params;
         if p.num_bodies == 0 {
@@ -553,10 +586,12 @@ impl Implicit<'_> {
             let eps = body.friction_slip_speed * p.dt;
             let slip = self.slip(b, i, di, n);
             let dslip = ci - ci.dot(n) * n;
-            for (o, &a) in out.iter_mut().zip(&alphas) {
+            for (k, (o, &a)) in out.iter_mut().zip(&alphas).enumerate() {
                 let depth2 = depth - a * n.dot(ci);
                 let (p0, p1) = (depth.max(0.0), depth2.max(0.0));
-                *o += 0.5 * k_c * (p1 - p0) * (p1 + p0);
+                let v = 0.5 * k_c * (p1 - p0) * (p1 + p0);
+                *o += v;
+                *scale += if k == 0 { v.abs() } else { 0.0 };
                 if lambda > 0.0 && body.friction > 0.0 {
                     let f0 = |s: f32| {
                         if s < eps {
@@ -566,7 +601,12 @@ impl Implicit<'_> {
                         }
                     };
                     let (s0, s1) = (slip.length(), (slip + a * dslip).length());
+                    let (e0, e1) = (
+                        body.friction * lambda * f0(s0),
+                        body.friction * lambda * f0(s1),
+                    );
                     *o += body.friction * lambda * (f0(s1) - f0(s0));
+                    *scale += if k == 0 { e0 + e1 } else { 0.0 };
                 }
             }
         }

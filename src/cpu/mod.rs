@@ -65,7 +65,8 @@ pub use implicit_terms::{
 };
 pub use integrate::{integrate, HingeGather};
 pub use line_energy::{
-    apply_correction, line_energy, line_search, line_search_from_full_step, tree_sum, LINE_ALPHAS,
+    apply_correction, line_energy, line_search, line_search_from_full_step, line_slopes,
+    slope_change, tree_sum, LINE_ALPHAS, LINE_ROUNDING,
 };
 pub use monitor::monitor;
 pub use pcg::{dot, pcg_direction, pcg_matvec, pcg_start, pcg_step, PcgScalars};

@@ -479,7 +479,7 @@ fn check_stages(label: &str, mut g: GpuSolver, mut c: Case) {
     }
     let mut correction = cg.correction;
 
-    check_line_search(&mut g, &mut c, &mut correction);
+    check_line_search(&mut g, &mut c, &mut correction, &force);
     check_force_residual(&mut g, &c);
 }
 
@@ -674,7 +674,7 @@ fn total(partials: &[Vec4]) -> Vec4 {
     partials.iter().fold(Vec4::ZERO, |a, p| a + *p)
 }
 
-fn check_line_search(g: &mut GpuSolver, c: &mut Case, correction: &mut [Vec4]) {
+fn check_line_search(g: &mut GpuSolver, c: &mut Case, correction: &mut [Vec4], force: &[Vec4]) {
     let n = c.prep.model.len();
     let step = c.step;
     // The correction filter: c plus (or less) multiples of the normal that a few roundings of
@@ -703,22 +703,47 @@ fn check_line_search(g: &mut GpuSolver, c: &mut Case, correction: &mut [Vec4]) {
     let mut partials = vec![Vec4::ZERO; n.div_ceil(64)];
     c.with(|s| cpu::line_energy(s, &c.x, correction, &mut partials));
     let got = g.solve_array(SolveArray::Partials).unwrap();
-    let diff = (total(&got[..partials.len()]) - total(&partials))
-        .abs()
-        .max_element();
+    let groups = partials.len();
+    let (got_total, want_total) = (total(&got[..groups]), total(&partials));
+    let diff = (got_total - want_total).truncate().abs().max_element();
     within("line_energy ΔG (J)", diff, line_energy_bound(c, correction));
+    // The scale: a sum of sizes, each a few roundings of its own (the same 32ε).
+    within(
+        "line_energy scale (J)",
+        (got_total.w - want_total.w).abs(),
+        32.0 * EPS * want_total.w,
+    );
+
+    // G's slopes −f·c at the iterate (the assembled force, as set) and at the full step: a
+    // force's difference (check_assemble's 16ε·H·ℓ per vertex) times |cᵢ|, summed, and the
+    // sums' roundings relative to Σ|fᵢ·cᵢ| (≲ 64 + groups additions).
+    g.run_solve_ops(&[SolveOp::LineSlopes], &step).unwrap();
+    let mut slopes = vec![Vec4::ZERO; groups];
+    c.with(|s| cpu::line_slopes(s, &c.x, correction, force, &mut slopes));
+    let got = g.solve_array(SolveArray::Partials).unwrap();
+    let sum_c: f32 = correction.iter().map(|v| v.truncate().length()).sum();
+    let sum_fc: f32 = (force.iter().zip(correction.iter()))
+        .map(|(f, v)| f.truncate().dot(v.truncate()).abs())
+        .sum();
+    let df = 16.0 * EPS * c.stiffest() * c.longest_edge();
+    let slope_bound = df * sum_c + (64.0 + groups as f32) * EPS * 4.0 * sum_fc;
+    let diff = (total(&got[groups..2 * groups]) - total(&slopes)).abs();
+    within("line_slopes G′(0) (J)", diff.x, slope_bound);
+    within("line_slopes G′(1) (J)", diff.y, slope_bound);
 
     // The line search from the CPU's partials: the same additions in the same order, the
     // same comparisons: the same step.
-    g.set_solve_array(SolveArray::Partials, &partials).unwrap();
+    let both: Vec<Vec4> = partials.iter().chain(&slopes).copied().collect();
+    g.set_solve_array(SolveArray::Partials, &both).unwrap();
     g.run_solve_ops(&[SolveOp::LineSearch], &step).unwrap();
-    let alpha = cpu::line_search(&partials);
+    let alpha = cpu::line_search(&partials, &slopes);
     assert_eq!(g.solve_scalars().unwrap().line_alpha, alpha, "line_search");
     eprintln!(
-        "  line_search: α = {alpha} on both (ΔG {:?})",
-        total(&partials)
+        "  line_search: α = {alpha} on both (ΔG {:?}, slopes {:?})",
+        total(&partials),
+        total(&slopes)
     );
-    same_step_from_full_step(c, correction);
+    same_step_from_full_step(c, correction, force);
 
     // D += α·c with α = ½ (whatever the search chose): a rounding of |D| + |α·c|, FMA or not.
     let half = SolveScalars {
@@ -743,22 +768,39 @@ fn check_line_search(g: &mut GpuSolver, c: &mut Case, correction: &mut [Vec4]) {
 /// (a short step down G: the full step is taken) and along 64 times it, whose full step (and
 /// its half and quarter) overshoot the minimum along it, so that the shorter steps are summed
 /// too. The partials start as NaN, as stale values from another step would be.
-fn same_step_from_full_step(c: &Case, correction: &[Vec4]) {
+fn same_step_from_full_step(c: &Case, correction: &[Vec4], force: &[Vec4]) {
     for scale in [1.0f32, 1.0 / 16.0, 64.0] {
         let along: Vec<Vec4> = correction.iter().map(|v| *v * scale).collect();
         let mut all = vec![Vec4::ZERO; c.x.len().div_ceil(64)];
+        let mut slopes = all.clone();
         c.with(|s| cpu::line_energy(s, &c.x, &along, &mut all));
-        let mut lazy = vec![Vec4::NAN; all.len()];
-        let alpha = c.with(|s| cpu::line_search_from_full_step(s, &c.x, &along, &mut lazy));
-        assert_eq!(alpha, cpu::line_search(&all), "the step along {scale}·c");
+        c.with(|s| cpu::line_slopes(s, &c.x, &along, force, &mut slopes));
+        let (mut lazy, mut lazy_slopes) = (vec![Vec4::NAN; all.len()], vec![Vec4::NAN; all.len()]);
+        let alpha = c.with(|s| {
+            let partials = (&mut lazy[..], &mut lazy_slopes[..]);
+            cpu::line_search_from_full_step(s, &c.x, &along, force, partials)
+        });
+        assert_eq!(
+            alpha,
+            cpu::line_search(&all, &slopes),
+            "the step along {scale}·c"
+        );
         let summed = if alpha == cpu::LINE_ALPHAS[0] { 1 } else { 3 };
         for (a, b) in all.iter().zip(&lazy) {
+            assert_eq!(a.w.to_bits(), b.w.to_bits(), "the scale along {scale}·c");
             for k in 0..summed {
                 assert_eq!(
                     a[k].to_bits(),
                     b[k].to_bits(),
                     "partial {k} along {scale}·c"
                 );
+            }
+        }
+        // Slopes the lazy search summed are the full search's, to the bit.
+        if !lazy_slopes[0].x.is_nan() {
+            for (a, b) in slopes.iter().zip(&lazy_slopes) {
+                assert_eq!(a.x.to_bits(), b.x.to_bits(), "G′(0) along {scale}·c");
+                assert_eq!(a.y.to_bits(), b.y.to_bits(), "G′(1) along {scale}·c");
             }
         }
         if scale > 1.0 {

@@ -244,6 +244,7 @@ impl Builder<'_> {
             }
             SolveOp::CorrectionFilter => self.push(out, K::CorrectionFilter, plain, n),
             SolveOp::LineEnergy => self.push(out, K::LineEnergy, plain, n),
+            SolveOp::LineSlopes => self.push(out, K::LineSlopes, plain, n),
             SolveOp::LineSearch => self.push(out, K::LineSearch, plain, 1),
             SolveOp::ApplyCorrection => self.push(out, K::ApplyCorrection, plain, n),
             SolveOp::ForceResidual => {

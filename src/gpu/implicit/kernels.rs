@@ -205,6 +205,8 @@ pub enum SolveKernel {
     CorrectionFilter,
     /// `line_energy`.
     LineEnergy,
+    /// `line_slopes`.
+    LineSlopes,
     /// `line_search`.
     LineSearch,
     /// `apply_correction`.
@@ -219,7 +221,7 @@ pub enum SolveKernel {
 
 impl SolveKernel {
     /// Every solve kernel.
-    pub const ALL: [SolveKernel; 21] = [
+    pub const ALL: [SolveKernel; 22] = [
         SolveKernel::ContactPlanes,
         SolveKernel::Sweep,
         SolveKernel::Assemble,
@@ -236,6 +238,7 @@ impl SolveKernel {
         SolveKernel::CoarseCycle,
         SolveKernel::CorrectionFilter,
         SolveKernel::LineEnergy,
+        SolveKernel::LineSlopes,
         SolveKernel::LineSearch,
         SolveKernel::ApplyCorrection,
         SolveKernel::ForceResidual,
@@ -261,6 +264,7 @@ impl SolveKernel {
             SolveKernel::CoarseCycle => "coarse_cycle",
             SolveKernel::CorrectionFilter => "correction_filter",
             SolveKernel::LineEnergy => "line_energy",
+            SolveKernel::LineSlopes => "line_slopes",
             SolveKernel::LineSearch => "line_search",
             SolveKernel::ApplyCorrection => "apply_correction",
             SolveKernel::ForceResidual => "force_residual",
@@ -298,6 +302,7 @@ impl SolveKernel {
                 include_str!("../../../kernels/correction_filter.wgsl")
             }
             SolveKernel::LineEnergy => include_str!("../../../kernels/line_energy.wgsl"),
+            SolveKernel::LineSlopes => include_str!("../../../kernels/line_slopes.wgsl"),
             SolveKernel::LineSearch => include_str!("../../../kernels/line_search.wgsl"),
             SolveKernel::ApplyCorrection => include_str!("../../../kernels/apply_correction.wgsl"),
             SolveKernel::ForceResidual => include_str!("../../../kernels/force_residual.wgsl"),
@@ -313,6 +318,7 @@ impl SolveKernel {
             SolveKernel::ContactPlanes => &[Terms, DeformedBody],
             SolveKernel::CorrectionFilter
             | SolveKernel::LineEnergy
+            | SolveKernel::LineSlopes
             | SolveKernel::ForceResidual => &[Terms],
             SolveKernel::Sweep | SolveKernel::Assemble => &[Hierarchy, Terms],
             SolveKernel::CoarseOperator | SolveKernel::PcgMatVec => &[Hierarchy, BlockTexels],
@@ -344,6 +350,7 @@ impl SolveKernel {
             "seams" => energies.seams,
             "membrane" => energies.membrane,
             "assemble" => self == SolveKernel::Assemble,
+            "trial" => self == SolveKernel::LineSlopes,
             "writes_control" => self.writes_control(),
             _ => true,
         };
@@ -428,6 +435,9 @@ impl SolveKernel {
             SolveKernel::CoarseCycle => vec![(OpList, false)],
             SolveKernel::CorrectionFilter => vec![(Correction, true)],
             SolveKernel::LineEnergy => vec![(Correction, false), (Partials, true)],
+            SolveKernel::LineSlopes => {
+                vec![(Force, false), (Correction, false), (Partials, true)]
+            }
             SolveKernel::LineSearch => vec![(Partials, false), (Scalars, true)],
             SolveKernel::ApplyCorrection => {
                 vec![(Disp, true), (Correction, false), (Scalars, false)]

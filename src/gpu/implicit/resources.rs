@@ -102,7 +102,8 @@ impl SolveBuffers {
             rhs: storage("level_rhs", vec4 * rows)?,
             e: storage("level_e", vec4 * rows)?,
             res: storage("level_res", vec4 * rows)?,
-            partials: storage("solve_partials", vec4 * sizes.groups)?,
+            // Two sets: the line search reads line_energy's and line_slopes' side by side.
+            partials: storage("solve_partials", 2 * vec4 * sizes.groups)?,
             scalars: storage("solve_scalars", std::mem::size_of::<SolveScalars>())?,
             op_list: storage("coarse_cycle_ops", 16 * sizes.capacity.1)?,
             op_params: {
