@@ -48,7 +48,7 @@ fn is_free(j: u32) -> bool {
     return prev(j).w != 0.0;
 }
 
-// Vertex i's world position at the iterate.
+// Vertex i's world position at the iterate (in line_slopes: at the full step, d_at).
 fn world(i: u32) -> vec3<f32> {
     return prev(i).xyz + d_at(i);
 }

@@ -1,6 +1,6 @@
 //! Implicit Euler's incremental potential at one vertex: its force (−gradient), its Hessian
 //! blocks and the change of its energy along a correction. Every implicit stage (`vbd_solve`,
-//! `assemble`, `line_energy`, `force_residual`) evaluates these; `kernels/implicit_terms.wgsl`
+//! `assemble`, `line_energy`, `line_slopes`, `force_residual`) evaluates these; `kernels/implicit_terms.wgsl`
 //! is their GPU twin.
 //!
 //! Backward Euler is x_{n+1} = argmin G(x) with

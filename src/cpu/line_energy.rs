@@ -38,12 +38,11 @@ pub fn line_search_from_full_step(
             in_order_sum(slope_partials)
         })
     };
-    let alpha = choose(in_order_sum(partials), &mut slopes_once);
-    if alpha == LINE_ALPHAS[0] {
-        return alpha;
+    if takes(0, in_order_sum(partials), &mut slopes_once) {
+        return LINE_ALPHAS[0];
     }
     energy_partials(s, d, c, [1, 2], partials);
-    choose(in_order_sum(partials), &mut slopes_once)
+    choose(in_order_sum(partials), slopes_once)
 }
 
 /// `line_energy` for the step lengths `LINE_ALPHAS[k]`, k in `which`: each block's sum of
@@ -173,15 +172,18 @@ fn in_order_sum(partials: &[Vec4]) -> Vec4 {
 /// rounding) the slopes' total.
 fn choose(energy: Vec4, mut slopes: impl FnMut() -> Vec4) -> f32 {
     for (k, &alpha) in LINE_ALPHAS.iter().enumerate() {
-        let change = energy[k];
-        if change <= 0.0 {
-            return alpha;
-        }
-        if change <= LINE_ROUNDING * energy.w && slope_change(alpha, slopes()) <= 0.0 {
+        if takes(k, energy, &mut slopes) {
             return alpha;
         }
     }
     0.0
+}
+
+/// Whether `line_search` takes step length `LINE_ALPHAS[k]`.
+fn takes(k: usize, energy: Vec4, slopes: &mut impl FnMut() -> Vec4) -> bool {
+    let change = energy[k];
+    change <= 0.0
+        || (change <= LINE_ROUNDING * energy.w && slope_change(LINE_ALPHAS[k], slopes()) <= 0.0)
 }
 
 /// G's change at step length α from its slopes at 0 and 1 (x, y), G quadratic along the
