@@ -48,11 +48,6 @@ fn is_free(j: u32) -> bool {
     return prev(j).w != 0.0;
 }
 
-// Vertex i's world position at the iterate (in line_slopes: at the full step, d_at).
-fn world(i: u32) -> vec3<f32> {
-    return prev(i).xyz + d_at(i);
-}
-
 // Vertex i's plane for body b.
 fn plane(b: u32, i: u32) -> vec4<f32> {
     return planes[b * params.num_particles + i];
@@ -275,15 +270,38 @@ fn hinge_at(h: u32) -> Hinge {
     return unpack_hinge(textureLoad(hinges, texel(2u * h), 0), textureLoad(hinges, texel(2u * h + 1u), 0));
 }
 
+// Hinge vertex j relative to the hinge's first vertex, which started at x_o and moved d_o,
+// at displacement dj: the start's difference plus the displacements' (cpu: hinge_corners,
+// where the precision is argued: world positions round to 6e-8 m at 1.3 m).
+fn hinge_corner(j: u32, x_o: vec3<f32>, dj: vec3<f32>, d_o: vec3<f32>) -> vec3<f32> {
+    return (prev(j).xyz - x_o) + (dj - d_o);
+}
+
 // The hinge's frame at the iterate plus a·c (c: the correction; a = 0 for the iterate itself).
 fn hinge_frame_at(hinge: Hinge, c: array<vec3<f32>, 4>, a: f32) -> HingeFrame {
     let v = hinge.v;
+    let x_o = prev(v.x).xyz;
+    let d_o = d_at(v.x) + a * c[0];
     return hinge_frame(
         hinge.stiffness,
-        prev(v.x).xyz + (d_at(v.x) + a * c[0]),
-        prev(v.y).xyz + (d_at(v.y) + a * c[1]),
-        prev(v.z).xyz + (d_at(v.z) + a * c[2]),
-        prev(v.w).xyz + (d_at(v.w) + a * c[3]),
+        hinge_corner(v.x, x_o, d_o, d_o),
+        hinge_corner(v.y, x_o, d_at(v.y) + a * c[1], d_o),
+        hinge_corner(v.z, x_o, d_at(v.z) + a * c[2], d_o),
+        hinge_corner(v.w, x_o, d_at(v.w) + a * c[3], d_o),
+    );
+}
+
+// The hinge's frame at the iterate (in line_slopes: at the full step, d_at).
+fn hinge_frame_here(hinge: Hinge) -> HingeFrame {
+    let v = hinge.v;
+    let x_o = prev(v.x).xyz;
+    let d_o = d_at(v.x);
+    return hinge_frame(
+        hinge.stiffness,
+        hinge_corner(v.x, x_o, d_o, d_o),
+        hinge_corner(v.y, x_o, d_at(v.y), d_o),
+        hinge_corner(v.z, x_o, d_at(v.z), d_o),
+        hinge_corner(v.w, x_o, d_at(v.w), d_o),
     );
 }
 
@@ -294,7 +312,7 @@ fn add_hinges(i: u32, assembling: bool, f: ptr<function, vec3<f32>>, hess: ptr<f
         let r = textureLoad(hinge_refs, texel(k), 0).x;
         let hinge = hinge_at(r / 4u);
         let v = hinge.v;
-        let t = hinge_frame(hinge.stiffness, world(v.x), world(v.y), world(v.z), world(v.w));
+        let t = hinge_frame_here(hinge);
         if (!t.valid) {
             continue;
         }

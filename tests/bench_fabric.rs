@@ -79,20 +79,19 @@ fn bench_fabric_membrane_cuts_warp_weft_and_bias_and_reports_the_residual() {
         tests,
         ["cusick", "cantilever", "cantilever_weft", "cantilever_bias"]
     );
-    // The implicit solve reports how far from balance each specimen ended. The Cusick drape
-    // rests well under the settle rule's 5% of the weight. The cantilever strips end near 20%
-    // with their tips at rest, and four Newton steps a substep leave the same figure: a floor
-    // of f32 arithmetic for particles weighing 9 µN on 500 N/m of stretch, not of the solve.
-    // Theirs is only required to be reported (the table shows it).
+    // The implicit solve reports how far from balance each specimen ended, and each must rest
+    // well under the settle rule's 5% of the weight: measured, the Cusick drape at 3e-3, the
+    // three strips at 5–7e-4. (With each hinge's corners as world positions, whose rounding
+    // moved the bending force in steps the solve could not balance, the strips ended near 20%.)
     let residual =
         |row: &std::collections::HashMap<String, String>| common::finite(row, "force_residual_rms");
-    assert!(
-        (0.0..0.05).contains(&residual(&rows[0])),
-        "{}",
-        residual(&rows[0])
-    );
-    for row in &rows[1..] {
-        assert!(residual(row) >= 0.0, "{}", row["test"]);
+    for row in &rows {
+        assert!(
+            (0.0..0.05).contains(&residual(row)),
+            "{}: {}",
+            row["test"],
+            residual(row)
+        );
     }
     // With no tolerance every step runs the default solve: one Newton step between two
     // smoothing sweeps before and two after.
@@ -319,17 +318,25 @@ fn buckling_drapes_leather_further_with_springs_and_with_the_membrane() {
         assert_eq!(md.contains("cloth that buckles"), buckles, "{md}");
         common::finite(&rows[0], "simulated")
     };
-    // Leather is stiff in plane (5.8e4 N/m) for its bending: linear springs or membrane hold
-    // the overhang out (75% and 80% at 15 mm), buckling ones let it fold (62% and 70%
-    // measured). The runs are deterministic, so had the law not reached the specimen the two
-    // would be equal; 5 points is the spread fold choice gives one specimen.
-    for model in ["springs", "membrane"] {
-        let (linear, buckling) = (dc(model, "linear"), dc(model, "buckling"));
-        assert!(
-            buckling < linear - 5.0,
-            "{model}: DC {buckling}% buckling, {linear}% linear"
-        );
-    }
+    // Leather is stiff in plane (5.8e4 N/m) for its bending: linear springs hold the overhang
+    // out, buckling ones let it fold (78% and 58% at 15 mm measured, with the quick run's one
+    // Newton step a substep; 88% and 67% with eight). The runs are deterministic, so had the
+    // law not reached the specimen the two would be equal; 5 points is the spread fold choice
+    // gives one specimen. The membrane buckles along its warp and weft only and gains less (9
+    // points at 7.5 mm with converged steps, in the book); at 15 mm it is 80% against 75% with
+    // one Newton step and 82.4% against 81.0% with eight, so only the direction is asserted.
+    // (With each hinge's corners as world positions the one-step membrane runs gave 80% and
+    // 70%: part of that gap was the unconverged solve.)
+    let (linear, buckling) = (dc("springs", "linear"), dc("springs", "buckling"));
+    assert!(
+        buckling < linear - 5.0,
+        "springs: DC {buckling}% buckling, {linear}% linear"
+    );
+    let (linear, buckling) = (dc("membrane", "linear"), dc("membrane", "buckling"));
+    assert!(
+        buckling < linear,
+        "membrane: DC {buckling}% buckling, {linear}% linear"
+    );
 }
 
 #[test]

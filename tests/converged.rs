@@ -321,13 +321,16 @@ fn newton_steps_converge_alike_at_three_resolutions_where_sweeps_do_not() {
 
 #[test]
 fn newton_steps_go_on_where_the_change_of_g_is_lost_in_its_rounding() {
-    // The cotton T-shirt at rest (2 cm, settled at frame 33), then one substep of twelve Newton
+    // The cotton T-shirt at rest (2 cm, settled at frame 34), then one substep of twelve Newton
     // steps. After a few, a step lowers G by about 1e-11 J, while the f32 sum of its change
-    // is only good to about 1e-9 J (the hinges' energies are differenced): a line search on
-    // that sum alone refused every step from the fifth on and left the RMS force residual at
-    // 3.2e-3 of the weight (measured with the search before G's slopes decided such changes).
-    // With the slopes, the steps go on: 2.7e-4 of the weight at best over the twelve,
-    // measured. 1e-3 sits a factor 3 from both.
+    // is only good to about 1e-9 J (the hinges' energies are differenced). With the hinges'
+    // corners as world positions, a line search on that sum alone refused every step from the
+    // fifth on and left the RMS force residual at 3.2e-3 of the weight; with G's slopes
+    // deciding such changes it reached 2.7e-4. With the hinges in their own coordinates the
+    // slopes reach 5.0e-4 at best over the twelve (measured), and the sum alone 9.8e-4 (its
+    // steps raise the residual between the fourth and the seventh): this test now guards the
+    // Newton steps' progress at rest, 1e-3 a factor 2 above it, and the near-balance test
+    // below checks that the slopes take steps the sum alone would refuse.
     let out = std::env::temp_dir().join(format!("drapekit-rounding-{}", std::process::id()));
     let rows = run_cli(&ConvergenceOptions {
         scene: fixture("scenes/tshirt_drape_cotton.toml"),
@@ -425,4 +428,114 @@ fn near_balance_the_slopes_take_steps_that_do_not_raise_g_beyond_its_rounding() 
         );
     }
     assert!(by_slopes >= 1, "no step was decided by the slopes");
+}
+
+#[test]
+fn a_hinge_far_from_the_origin_bends_as_finely_as_its_own_size_allows() {
+    // A hinge of cotton's rigidity (3.14e-5 N·m; the shirt's hinges carry four times that)
+    // with 5 mm edges, bent by about 0.01 rad, at 1.3 m (a shoulder's height), where an f32
+    // world coordinate rounds to 6e-8 m. Its far vertex x1 moves 5e-8 m
+    // out of its triangle's plane: from world positions xₙ + D that move is lost (xₙ + D rounds
+    // back to xₙ) and the force does not change, so Newton's steps could not balance the
+    // bending force finer than such steps (the 5 mm shirt stalled at 2% of the weight). From
+    // the hinge's own differences the change is resolved. The f64 force below is the hinge
+    // force w₀(s − s₀)·u written out; each f32 force is good to a few roundings of sin(θ/2)
+    // (its corners exact to ε of the 5 mm edges, its normals unit): w₀·|u|·8ε (ε = 2⁻²³),
+    // doubled for a difference of two, a third of the 2.4e-8 N change.
+    let base = DVec3::new(0.01, 1.3, 0.02);
+    let l = 0.005;
+    let h3 = 3f64.sqrt() / 2.0 * l;
+    // [x3, x4, x1, x2]: the shared edge along x, x1 above it in -z, x2 in +z bent down 0.01.
+    let local = [
+        DVec3::ZERO,
+        DVec3::new(l, 0.0, 0.0),
+        DVec3::new(0.5 * l, 0.0, -h3),
+        DVec3::new(0.5 * l, -0.01 * h3, h3),
+    ];
+    let prev: Vec<Vec4> = local
+        .iter()
+        .map(|p| (base + *p).as_vec3().extend(1.0))
+        .collect();
+    let normal = DVec3::Y;
+    let delta = 5e-8;
+    // An f32 in [1, 2) is a multiple of ε = 2⁻²³: half of that rounds away.
+    assert!(
+        delta < 0.5 * f64::from(f32::EPSILON),
+        "under half an ulp at 1.3 m"
+    );
+    let params = SimParams {
+        num_particles: 4,
+        dt: 1.0 / 480.0,
+        ..Default::default()
+    };
+    let stiffness = 3.14e-5;
+    let exact = |x: [DVec3; 4]| {
+        let [x3, x4, x1, _] = x;
+        let n1 = (x1 - x3).cross(x1 - x4);
+        let u = (x4 - x3).length() * n1 / n1.length_squared();
+        sin_half(x).unwrap() * u
+    };
+    let corners = |moved: f64| {
+        let mut x = prev.iter().map(|p| d3(*p)).collect::<Vec<_>>();
+        x[2] += moved * normal;
+        [x[0], x[1], x[2], x[3]]
+    };
+    let rest = prev.iter().map(|p| d3(*p)).collect::<Vec<_>>();
+    let mut hinge = drapekit::model::layout::Hinge {
+        v: [0, 1, 2, 3],
+        stiffness,
+        ..Default::default()
+    };
+    let (e, n1, n2) = (
+        rest[1] - rest[0],
+        (rest[2] - rest[0]).cross(rest[2] - rest[1]),
+        (rest[3] - rest[1]).cross(rest[3] - rest[0]),
+    );
+    hinge.rest_weight =
+        (stiffness as f64 * e.length_squared() / (n1.length() + n2.length())) as f32;
+    let w0 = hinge.rest_weight as f64;
+    let hinges = [hinge];
+    let (hinge_offsets, refs) = ([0u32, 0, 0, 1, 1], [2u32]);
+    let spring_offsets = [0u32; 5];
+    let el = VbdElements {
+        row_of: None,
+        springs: (&spring_offsets, &[]),
+        hinges: Some((&hinge_offsets, &refs, &hinges)),
+        seams: None,
+        membranes: None,
+    };
+    let force = |moved: f32| {
+        let mut d = vec![Vec4::ZERO; 4];
+        d[2] = (moved * normal.as_vec3()).extend(0.0);
+        let step = Default::default();
+        let lambdas = vec![Vec4::ZERO; 4];
+        let s = Implicit {
+            params: &params,
+            step: &step,
+            prev: &prev,
+            // The inertial target at the iterate: the hinge's force alone.
+            target: &d,
+            el: &el,
+            planes: &[],
+            lambdas: &lambdas,
+        };
+        s.vertex_system(2, &d, None, &mut |_, _| {})
+            .force
+            .as_dvec3()
+    };
+    let change = force(delta as f32) - force(0.0);
+    let exact_change = w0 * (exact(corners(delta)) - exact(corners(0.0)));
+    let u = exact(corners(0.0)).length() / sin_half(corners(0.0)).unwrap();
+    let bound = 2.0 * w0 * u * 8.0 * f64::from(f32::EPSILON);
+    assert!(
+        bound < exact_change.length() / 2.0,
+        "the bound {bound} N resolves the change {} N",
+        exact_change.length()
+    );
+    let error = (change - exact_change).length();
+    assert!(
+        error <= bound,
+        "moving 5e-8 m changed the force by {change} N, the hinge by {exact_change} N \
+         (off by {error} N, bound {bound} N)"
+    );
 }

@@ -8,8 +8,9 @@
 //! The iterate is kept as the displacement D = x − xₙ of each vertex over the step, not as a
 //! world position: a 5 mm edge at 1.3 m keeps 8 fewer bits in world coordinates (ulp 1.2e-7 m)
 //! than as a difference of displacements (ulp ~1e-10 m over a millimetre), and a spring's
-//! force k·1.2e-7 m is already several times a 5 mm particle's weight. Edge vectors are
-//! (xₙᵢ − xₙⱼ) + (Dᵢ − Dⱼ): the first difference is exact in f32 for nearby points.
+//! force k·1.2e-7 m is already several times a 5 mm particle's weight. Edge vectors, and a
+//! hinge's vertices relative to its first, are (xₙᵢ − xₙⱼ) + (Dᵢ − Dⱼ): the first difference
+//! is exact in f32 for nearby points.
 //!
 //! The terms (each a potential in D within a step, so that a line search can compare
 //! energies):
@@ -218,11 +219,27 @@ impl Implicit<'_> {
         (fa, ha)
     }
 
-    /// The frame of hinge `hinge` at displacements `d` (world positions xₙ + D).
+    /// The frame of hinge `hinge` at displacements `d`.
     #[inline(always)]
     fn hinge_frame(&self, hinge: &Hinge, d: &[Vec4]) -> Option<HingeFrame> {
-        let x = |v: u32| Vec3A::from(v3(self.prev[v as usize]) + v3(d[v as usize]));
-        HingeFrame::at(hinge.v.map(x), hinge.stiffness)
+        let corners = self.hinge_corners(hinge, |v| v3(d[v]));
+        HingeFrame::at(corners, hinge.stiffness)
+    }
+
+    /// The hinge's four vertices relative to its first, at displacements `disp(v)`: the
+    /// start's differences xₙᵥ − xₙₒ (exact in f32 for nearby points) plus the displacements'
+    /// differences, as the springs' edge vectors are formed. World positions xₙ + D would each
+    /// round to 6e-8 m at 1.3 m, 1e-5 of a 5 mm edge: the angle would move in steps of about
+    /// 1e-5 rad, and the bending force with it, by more than the force residual a converged
+    /// 5 mm step leaves (Newton's steps stalled at 2% of the weight).
+    #[inline(always)]
+    fn hinge_corners(&self, hinge: &Hinge, disp: impl Fn(usize) -> Vec3) -> [Vec3A; 4] {
+        let o = hinge.v[0] as usize;
+        let (start, moved) = (v3(self.prev[o]), disp(o));
+        hinge.v.map(|v| {
+            let v = v as usize;
+            Vec3A::from((v3(self.prev[v]) - start) + (disp(v) - moved))
+        })
     }
 
     /// The vertex's constant stiffness, the mean diagonal of what does not depend on the
@@ -614,11 +631,8 @@ impl Implicit<'_> {
 
     /// Hinge energy w₀·ψ(θ) at displacements d + a·c (0 for a degenerate hinge).
     fn hinge_energy(&self, hinge: &Hinge, d: &[Vec4], c: &[Vec4], a: f32) -> f32 {
-        let x = |v: u32| {
-            let v = v as usize;
-            Vec3A::from(v3(self.prev[v]) + (v3(d[v]) + a * v3(c[v])))
-        };
-        match HingeFrame::at(hinge.v.map(x), hinge.stiffness) {
+        let corners = self.hinge_corners(hinge, |v| v3(d[v]) + a * v3(c[v]));
+        match HingeFrame::at(corners, hinge.stiffness) {
             Some(t) => hinge.rest_weight * hinge_psi(t.sin_half, hinge.rest_sin_half),
             None => 0.0,
         }

@@ -903,3 +903,84 @@ fn check_force_residual(g: &mut GpuSolver, c: &Case) {
     );
     assert_eq!(control.done, 0, "no tolerance check ran");
 }
+
+/// A flat cotton sheet of 5 mm squares at 1.3 m (a shoulder's height), one interior vertex
+/// lifted 5e-8 m, under half an f32 ulp of that height: the change of its assembled force is
+/// its hinges' (the springs' change is of second order in the lift; inertia's is m/h² ≈ 0.2
+/// N/m times the lift, 1e-8 N), and the GPU must resolve it as the CPU does. From world
+/// positions xₙ + D the lift rounds away and the hinges' share (1.5e-6 N) is lost;
+/// `tests/converged.rs` checks the CPU's against the hinge force in f64. Each backend's
+/// hinge force is good to a few roundings of sin(θ/2) per hinge: w₀·|u|·8·EPS (EPS = 2⁻²⁴,
+/// this file's rounding), doubled for the difference of two evaluations.
+#[test]
+fn a_lift_under_the_world_rounding_bends_the_hinges_on_the_gpu_as_on_the_cpu() {
+    let Some(ctx) = gpu() else { return };
+    let text = r#"
+[cloth.grid]
+width_m = 0.08
+height_m = 0.08
+columns = 17
+rows = 17
+center_m = [0.0, 1.3, 0.0]
+plane = "xz"
+[fabric]
+preset = "cotton"
+[world]
+gravity_m_s2 = [0.0, 0.0, 0.0]
+[solver]
+fps = 24
+frames = 1
+substeps = 8
+integrator = "implicit"
+"#;
+    let scene = Scene::parse(text, std::path::Path::new("lifted_sheet.toml")).unwrap();
+    let prep = prepare(&scene).unwrap();
+    assert!(
+        prep.model.multigrid.is_some(),
+        "the sheet has coarse levels"
+    );
+    let mut cpu = cpu::CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let state = cpu.state().unwrap();
+    let step = substep_params(&prep, 0)[0];
+    let mut g = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
+    g.set_state(&state);
+    g.run_passes(&[Pass::VbdInit], &[step]).unwrap();
+    let c = Case::new(prep, state, step);
+    // The middle vertex: 8 rows and 8 columns in.
+    let i = 8 * 17 + 8;
+    let lift = 5e-8f32;
+    // An f32 in [1, 2) is a multiple of 2⁻²³: half of that rounds away.
+    assert!(lift < 0.5 * f32::EPSILON, "under half an ulp at 1.3 m");
+    let (flat, mut lifted) = (c.x.clone(), c.x.clone());
+    lifted[i].y += lift;
+    let mut change = |d: &[Vec4]| {
+        g.set_solve_array(SolveArray::Displacement, d).unwrap();
+        g.run_solve_ops(&[SolveOp::Assemble], &c.step).unwrap();
+        let gpu = g.solve_array(SolveArray::Force).unwrap()[i].truncate();
+        let cpu = c.with(|s| s.vertex_system(i, d, None, &mut |_, _| {}).force);
+        (gpu, cpu)
+    };
+    let (gpu_flat, cpu_flat) = change(&flat);
+    let (gpu_lifted, cpu_lifted) = change(&lifted);
+    let (gpu, cpu) = (gpu_lifted - gpu_flat, cpu_lifted - cpu_flat);
+    // w₀·|u| over the vertex's hinges, |u| ≤ |e|·(1/|n₁| + 1/|n₂|) for any role.
+    let world = |v: u32| c.state.positions[v as usize].truncate();
+    let el = c.elements.view();
+    let (offsets, _, hinges) = el.hinges.expect("the sheet bends");
+    let mut scale = 0.0f32;
+    for h in &hinges[offsets[i] as usize..offsets[i + 1] as usize] {
+        let [x3, x4, x1, x2] = h.v.map(world);
+        let e = (x4 - x3).length();
+        let (n1, n2) = ((x1 - x3).cross(x1 - x4), (x2 - x4).cross(x2 - x3));
+        scale += h.rest_weight * e * (1.0 / n1.length() + 1.0 / n2.length());
+    }
+    let bound = 2.0 * 8.0 * EPS * scale;
+    eprintln!("force change: gpu {gpu}, cpu {cpu} N; bound {bound} N");
+    // A GPU that lost the hinges' share would be off by nearly the whole change: it must be
+    // beyond the bound for the check to tell (measured: 2.7 times the bound).
+    assert!(
+        cpu.length() > 2.0 * bound,
+        "the lift's force change {cpu} N stands out of the bound {bound} N"
+    );
+    within("lifted hinge force change (N)", (gpu - cpu).length(), bound);
+}
