@@ -291,18 +291,11 @@ fn hinge_frame_at(hinge: Hinge, c: array<vec3<f32>, 4>, a: f32) -> HingeFrame {
     );
 }
 
-// The hinge's frame at the iterate (in line_slopes: at the full step, d_at).
+// The hinge's frame at the iterate (in line_slopes: at the full step, d_at): d + 0·0 equals d
+// (to the bit but for the sign of a zero).
 fn hinge_frame_here(hinge: Hinge) -> HingeFrame {
-    let v = hinge.v;
-    let x_o = prev(v.x).xyz;
-    let d_o = d_at(v.x);
-    return hinge_frame(
-        hinge.stiffness,
-        hinge_corner(v.x, x_o, d_o, d_o),
-        hinge_corner(v.y, x_o, d_at(v.y), d_o),
-        hinge_corner(v.z, x_o, d_at(v.z), d_o),
-        hinge_corner(v.w, x_o, d_at(v.w), d_o),
-    );
+    let zero = vec3<f32>(0.0);
+    return hinge_frame_at(hinge, array<vec3<f32>, 4>(zero, zero, zero, zero), 0.0);
 }
 
 fn add_hinges(i: u32, assembling: bool, f: ptr<function, vec3<f32>>, hess: ptr<function, mat3x3<f32>>) {

@@ -11,10 +11,10 @@ use drapekit::cpu::{
     hinge_psi, line_energy, line_search, line_slopes, CpuSolver, Elements, Implicit, VbdElements,
     LINE_ALPHAS, LINE_ROUNDING,
 };
-use drapekit::model::layout::SimParams;
+use drapekit::model::layout::{SimParams, SubstepParams};
 use drapekit::plan::{newton_correction, Pass, SolveOp, SolveShape, LINEAR_ITERATIONS};
 use drapekit::scene::Scene;
-use drapekit::sim::{phase_params, prepare, simulate, substep_params, RunStats};
+use drapekit::sim::{phase_params, prepare, simulate, substep_params, Prepared, RunStats};
 use drapekit::solver::Solver;
 use glam::{DVec3, Vec4};
 
@@ -155,6 +155,41 @@ fn an_accepted_newton_correction_never_raises_the_potential_with_buckling() {
 
 /// The cotton T-shirt (`scene`) meshed at 4 cm, sewn and draped for 36 frames, then one
 /// substep whose iterate is pushed 1 mm off at random: the Newton corrections have work to do.
+/// The solver run through `prep`'s frames (until it settles or ends), then set up for the
+/// next frame's first substep: its parameters, the step's values, the inertial target and the
+/// contact planes, as a substep begins.
+fn next_substep(prep: &Prepared) -> (CpuSolver, RunStats, SimParams, SubstepParams) {
+    let mut solver = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let mut stats = RunStats::default();
+    simulate(prep, &mut solver, &mut stats, |_, _| Ok(())).unwrap();
+    let frame = stats.frames_run;
+    let params = phase_params(prep, frame, &stats);
+    solver.set_params(&params);
+    let step = substep_params(prep, frame + 1)[0];
+    solver.run_pass(Pass::VbdInit, &step);
+    solver.run_solve_ops(&[SolveOp::ContactPlanes], &step);
+    (solver, stats, params, step)
+}
+
+/// The implicit terms at the solver's current substep.
+fn terms<'a>(
+    params: &'a SimParams,
+    step: &'a SubstepParams,
+    solver: &'a CpuSolver,
+    el: &'a VbdElements<'a>,
+) -> Implicit<'a> {
+    let v = solver.vbd.as_ref().unwrap();
+    Implicit {
+        params,
+        step,
+        prev: &solver.pos,
+        target: &v.y,
+        el,
+        planes: &v.planes,
+        lambdas: &v.lambdas,
+    }
+}
+
 fn accepted_corrections_never_raise_the_potential(mut scene: Scene) {
     if let drapekit::scene::ClothSource::Pattern { options, .. } = &mut scene.cloth {
         options.particle_distance = 0.04;
@@ -168,14 +203,8 @@ fn accepted_corrections_never_raise_the_potential(mut scene: Scene) {
         prep.model.multigrid.is_some(),
         "the 4 cm shirt has coarse levels"
     );
-    let mut solver = CpuSolver::new(&prep.model, prep.params, &prep.plan);
-    let mut stats = RunStats::default();
-    simulate(&prep, &mut solver, &mut stats, |_, _| Ok(())).unwrap();
-    let params = phase_params(&prep, 36, &stats);
-    solver.set_params(&params);
-    let step = substep_params(&prep, 37)[0];
-    solver.run_pass(Pass::VbdInit, &step);
-    solver.run_solve_ops(&[SolveOp::ContactPlanes], &step);
+    let (mut solver, stats, params, step) = next_substep(&prep);
+    assert_eq!(stats.frames_run, 36, "the shirt runs its 36 frames");
     let mut rng = Rng::new(23);
     {
         let v = solver.vbd.as_mut().unwrap();
@@ -204,15 +233,7 @@ fn accepted_corrections_never_raise_the_potential(mut scene: Scene) {
         solver.run_solve_ops(&newton_correction(shape), &step);
         let v = solver.vbd.as_ref().unwrap();
         let alpha = *v.newton.as_ref().unwrap().alphas.last().unwrap();
-        let s = Implicit {
-            params: &params,
-            step: &step,
-            prev: &solver.pos,
-            target: &v.y,
-            el: &el,
-            planes: &v.planes,
-            lambdas: &v.lambdas,
-        };
+        let s = terms(&params, &step, &solver, &el);
         let (g0, size0) = potential(&s, &before);
         let (g1, size1) = potential(&s, &v.x);
         // The line search summed the change in f32: each term's change is exact to a few
@@ -366,16 +387,8 @@ fn near_balance_the_slopes_take_steps_that_do_not_raise_g_beyond_its_rounding() 
     // correction.
     let scene = Scene::load(&fixture("scenes/tshirt_drape_cotton.toml")).unwrap();
     let prep = prepare(&scene).unwrap();
-    let mut solver = CpuSolver::new(&prep.model, prep.params, &prep.plan);
-    let mut stats = RunStats::default();
-    simulate(&prep, &mut solver, &mut stats, |_, _| Ok(())).unwrap();
+    let (mut solver, stats, params, step) = next_substep(&prep);
     assert!(stats.settled.is_some(), "the shirt settles");
-    let frame = stats.frames_run;
-    let params = phase_params(&prep, frame, &stats);
-    solver.set_params(&params);
-    let step = substep_params(&prep, frame + 1)[0];
-    solver.run_pass(Pass::VbdInit, &step);
-    solver.run_solve_ops(&[SolveOp::ContactPlanes], &step);
     let shape = SolveShape::for_run(&prep.model, &params, &prep.plan);
     let elements = Elements::new(&prep.model);
     let el = elements.view();
@@ -388,15 +401,7 @@ fn near_balance_the_slopes_take_steps_that_do_not_raise_g_beyond_its_rounding() 
         let v = solver.vbd.as_ref().unwrap();
         let newton = v.newton.as_ref().unwrap();
         let alpha = *newton.alphas.last().unwrap();
-        let s = Implicit {
-            params: &params,
-            step: &step,
-            prev: &solver.pos,
-            target: &v.y,
-            el: &el,
-            planes: &v.planes,
-            lambdas: &v.lambdas,
-        };
+        let s = terms(&params, &step, &solver, &el);
         let groups = before.len().div_ceil(64);
         let (mut energy, mut slopes) = (vec![Vec4::ZERO; groups], vec![Vec4::ZERO; groups]);
         let c = &newton.correction;
