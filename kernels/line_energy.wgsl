@@ -6,7 +6,7 @@
 // Each change is a difference of nearby quantities, not G(x + αc) − G(x), so it keeps its
 // precision however large G is; a hinge's energies and friction's potentials are differenced,
 // and their two values count in the scale. CPU twin: line_energy in src/cpu/line_energy.rs and
-// Implicit::energy_change in src/cpu/implicit_terms.rs.
+// Implicit::energy_change in src/cpu/implicit_terms/energy_change.rs.
 
 @group(0) @binding(21) var<storage, read> correction: array<vec4<f32>>;
 @group(0) @binding(27) var<storage, read_write> partials: array<vec4<f32>>;

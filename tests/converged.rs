@@ -153,8 +153,6 @@ fn an_accepted_newton_correction_never_raises_the_potential_with_buckling() {
     accepted_corrections_never_raise_the_potential(scene);
 }
 
-/// The cotton T-shirt (`scene`) meshed at 4 cm, sewn and draped for 36 frames, then one
-/// substep whose iterate is pushed 1 mm off at random: the Newton corrections have work to do.
 /// The solver run through `prep`'s frames (until it settles or ends), then set up for the
 /// next frame's first substep: its parameters, the step's values, the inertial target and the
 /// contact planes, as a substep begins.
@@ -190,6 +188,8 @@ fn terms<'a>(
     }
 }
 
+/// The cotton T-shirt (`scene`) meshed at 4 cm, sewn and draped for 36 frames, then one
+/// substep whose iterate is pushed 1 mm off at random: the Newton corrections have work to do.
 fn accepted_corrections_never_raise_the_potential(mut scene: Scene) {
     if let drapekit::scene::ClothSource::Pattern { options, .. } = &mut scene.cloth {
         options.particle_distance = 0.04;

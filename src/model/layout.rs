@@ -163,7 +163,7 @@ pub struct Hinge {
     pub rest_sin_half: f32,
     /// k·|E|²/(|N1| + |N2|) of the rest shape, in N·m: implicit Euler's bending energy is
     /// this weight times ψ(θ) = −2·cos(θ/2) − sin(θ0/2)·θ, a potential whose gradient is the
-    /// hinge force (`cpu::hinge_energy`).
+    /// hinge force (`Implicit::hinge_energy` in `cpu/implicit_terms/energy_change.rs`).
     pub rest_weight: f32,
     /// Padding.
     pub _pad1: u32,

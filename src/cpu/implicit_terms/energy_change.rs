@@ -1,6 +1,7 @@
 //! The change of implicit Euler's incremental potential G along a correction, counted vertex by
-//! vertex, for the line search (`line_energy`, `line_slopes`); `kernels/implicit_terms.wgsl`
-//! is its GPU twin. A child of `implicit_terms`, whose terms it shares.
+//! vertex, for the line search (`line_energy`); GPU twin: `kernels/line_energy.wgsl`
+//! (`hinge_psi`: `kernels/implicit_terms.wgsl`). A child of `implicit_terms`, whose terms it
+//! shares.
 
 use super::{seam_combination, v3, Implicit};
 use crate::cpu::hinge_forces::HingeFrame;
