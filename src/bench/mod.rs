@@ -31,6 +31,10 @@ pub use peer_report::CSV_HEADER as PEER_CSV_HEADER;
 
 pub use grid::{bench_model, bench_steps, BenchRow};
 
+use crate::error::Error;
+use crate::gpu::{AdapterChoice, GpuContext};
+use crate::run::BackendChoice;
+
 /// The CPU's model name and core count, from /proc/cpuinfo where available.
 pub fn cpu_description() -> String {
     let model = std::fs::read_to_string("/proc/cpuinfo")
@@ -46,6 +50,28 @@ pub fn cpu_description() -> String {
         .map(|n| n.get())
         .unwrap_or(1);
     format!("{model}, {cores} cores")
+}
+
+/// The path a benchmark runs on, from `--backend` and `--adapter` as `drapekit run` reads them
+/// (auto: a hardware GPU if there is one, a software adapter only when asked for by name, else
+/// the CPU), and its description for the report.
+pub fn choose_device(
+    choice: BackendChoice,
+    adapter: &AdapterChoice,
+) -> Result<(Option<GpuContext>, String), Error> {
+    let cpu = || (None, format!("CPU twin ({})", cpu_threads_description()));
+    let gpu = |ctx: GpuContext| {
+        let d = ctx.report().describe();
+        (Some(ctx), d)
+    };
+    Ok(match choice {
+        BackendChoice::Cpu => cpu(),
+        BackendChoice::Gpu => gpu(GpuContext::new(adapter)?),
+        BackendChoice::Auto => match GpuContext::new(adapter) {
+            Ok(ctx) if !ctx.is_software() || crate::run::adapter_named(adapter) => gpu(ctx),
+            _ => cpu(),
+        },
+    })
 }
 
 /// The CPU and the rayon threads the CPU twin runs on (`--threads`).

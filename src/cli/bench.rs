@@ -240,6 +240,14 @@ struct FabricArgs {
     /// (`[fabric] compression`).
     #[arg(long, default_value = "linear", value_parser = ["linear", "buckling"])]
     compression: String,
+    /// cpu: the CPU twin (the reference figures); gpu; auto: a hardware GPU if there is one,
+    /// else the CPU.
+    #[arg(long, default_value = "cpu")]
+    backend: BackendChoice,
+    /// The GPU path's adapter: auto (honours WGPU_ADAPTER_NAME), fallback (software), or part
+    /// of an adapter name.
+    #[arg(long, default_value = "auto")]
+    adapter: AdapterChoice,
 }
 
 /// The command line as a reader would type it: `drapekit` and its arguments, whatever path
@@ -429,6 +437,8 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
                     cusick: f.tests.is_empty() || f.tests.iter().any(|t| t == "cusick"),
                     cantilever: f.tests.is_empty() || f.tests.iter().any(|t| t == "cantilever"),
                 },
+                backend: f.backend,
+                adapter: f.adapter,
                 command: command_line(),
             })
             .map(|_| ())

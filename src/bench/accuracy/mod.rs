@@ -11,7 +11,7 @@ pub mod point;
 pub mod report;
 
 use crate::error::Error;
-use crate::gpu::{AdapterChoice, GpuContext};
+use crate::gpu::AdapterChoice;
 use crate::run::BackendChoice;
 use crate::scene::Scene;
 use ladder::{Knob, Point, Setting};
@@ -172,25 +172,12 @@ fn choose_backend(
     choice: BackendChoice,
     adapter: &AdapterChoice,
 ) -> Result<(Backend, String), Error> {
-    let cpu = || {
-        (
-            Backend::Cpu,
-            format!("CPU twin ({})", super::cpu_threads_description()),
-        )
+    let (gpu, device) = super::choose_device(choice, adapter)?;
+    let backend = match gpu {
+        Some(ctx) => Backend::Gpu(Box::new(ctx)),
+        None => Backend::Cpu,
     };
-    let gpu = |ctx: GpuContext| {
-        let d = ctx.report().describe();
-        (Backend::Gpu(Box::new(ctx)), d)
-    };
-    Ok(match choice {
-        BackendChoice::Cpu => cpu(),
-        BackendChoice::Gpu => gpu(GpuContext::new(adapter)?),
-        // As `drapekit run`: a software adapter only when it was asked for by name.
-        BackendChoice::Auto => match GpuContext::new(adapter) {
-            Ok(ctx) if !ctx.is_software() || crate::run::adapter_named(adapter) => gpu(ctx),
-            _ => cpu(),
-        },
-    })
+    Ok((backend, device))
 }
 
 /// Runs `setting`, or reuses the outcome of a row that ran the same settings.

@@ -14,6 +14,8 @@ pub use specimen::Stepping;
 
 use crate::atomic_file::write_atomic;
 use crate::error::{Error, InputError};
+use crate::gpu::{AdapterChoice, GpuContext};
+use crate::run::BackendChoice;
 use crate::scene::{preset, FabricPreset, PRESETS};
 use specimen::{Outline, HEIGHT_M};
 use std::path::{Path, PathBuf};
@@ -43,6 +45,10 @@ pub struct FabricOptions {
     pub cusick_spacing: Option<f64>,
     /// Which tests to run: the Cusick drape test, the cantilevers, or both.
     pub tests: Tests,
+    /// Which path runs the specimens (the CPU twin gives the reference figures).
+    pub backend: BackendChoice,
+    /// The adapter, for the GPU path.
+    pub adapter: AdapterChoice,
     /// The command line, for the report.
     pub command: String,
 }
@@ -136,6 +142,7 @@ fn cusick_row(
     dir: &Path,
     spacing: f64,
     step: &Stepping,
+    gpu: Option<&GpuContext>,
 ) -> Result<FabricRow, Error> {
     let disc = cusick::DISC_RADIUS_M as f32;
     let s = specimen::settle(
@@ -148,6 +155,7 @@ fn cusick_row(
         },
         spacing,
         step,
+        gpu,
         CUSICK_SETTLED_M,
         |x| x.x.hypot(x.z) <= disc,
     )?;
@@ -205,6 +213,7 @@ fn cantilever_row(
     dir: &Path,
     quick: bool,
     step: &Stepping,
+    gpu: Option<&GpuContext>,
     (test, grain_deg): (&'static str, f64),
 ) -> Result<FabricRow, Error> {
     let b = specimen::strip_rigidity(p, step, grain_deg);
@@ -255,6 +264,7 @@ fn cantilever_row(
             },
             spacing,
             step,
+            gpu,
             CANTILEVER_SETTLED_M,
             |x| x.x <= 0.0,
         )?;
@@ -353,6 +363,8 @@ pub fn run_cli(opts: &FabricOptions) -> Result<Vec<FabricRow>, Error> {
         }
         list
     };
+    let (gpu, device) = super::choose_device(opts.backend, &opts.adapter)?;
+    println!("specimens run on {device}");
     let dir = opts.out.join("specimens");
     let mut rows = Vec::new();
     let cusick_spacing = opts
@@ -369,12 +381,12 @@ pub fn run_cli(opts: &FabricOptions) -> Result<Vec<FabricRow>, Error> {
             ..*p
         };
         if opts.tests.cusick {
-            let row = cusick_row(p, &dir, cusick_spacing, &opts.stepping)?;
+            let row = cusick_row(p, &dir, cusick_spacing, &opts.stepping, gpu.as_ref())?;
             println!("{}", report::line(&row));
             rows.push(row);
         }
         for &cut in cuts {
-            let row = cantilever_row(p, &dir, opts.quick, &opts.stepping, cut)?;
+            let row = cantilever_row(p, &dir, opts.quick, &opts.stepping, gpu.as_ref(), cut)?;
             println!("{}", report::line(&row));
             rows.push(row);
         }
@@ -382,7 +394,7 @@ pub fn run_cli(opts: &FabricOptions) -> Result<Vec<FabricRow>, Error> {
     std::fs::create_dir_all(&opts.out).map_err(|e| Error::io(&opts.out, e))?;
     let (csv, md) = (opts.out.join("fabric.csv"), opts.out.join("fabric.md"));
     write_atomic(&csv, report::csv_text(&rows).as_bytes())?;
-    write_atomic(&md, report::md_text(&rows, opts).as_bytes())?;
+    write_atomic(&md, report::md_text(&rows, opts, &device).as_bytes())?;
     println!("wrote {} and {}", csv.display(), md.display());
     Ok(rows)
 }

@@ -1,7 +1,6 @@
 //! `fabric.csv` and `fabric.md` from the rows of `drapekit bench fabric`.
 
 use super::{FabricOptions, FabricRow, GRAVITY};
-use crate::bench::cpu_threads_description;
 use std::fmt::Write as _;
 
 /// The columns of `fabric.csv`, documented in docs/src/benchmarks/fabric.md.
@@ -174,17 +173,16 @@ fn stepping_text(s: &super::Stepping) -> String {
     stepping + model + compression + &bending
 }
 
-pub(super) fn md_text(rows: &[FabricRow], opts: &FabricOptions) -> String {
+pub(super) fn md_text(rows: &[FabricRow], opts: &FabricOptions, device: &str) -> String {
     let tests = match (opts.tests.cusick, opts.tests.cantilever) {
         (true, true) => "two virtual standard tests",
         (true, false) => "the virtual Cusick drape test",
         _ => "the virtual cantilever bending test",
     };
     let mut md = format!(
-        "Fabric presets in {tests}, on the CPU path ({}); {}, air damping \
+        "Fabric presets in {tests}, on {device}; {}, air damping \
          10/s, each specimen run until no particle moved more than 0.5 mm (Cusick) or 0.1 mm \
          (cantilever) over 0.25 s (at most {} frames at 24 fps). Command: `{}`.\n\n",
-        cpu_threads_description(),
         stepping_text(&opts.stepping),
         opts.stepping.max_frames,
         opts.command

@@ -4,6 +4,7 @@
 
 use crate::atomic_file::write_atomic;
 use crate::error::Error;
+use crate::gpu::GpuContext;
 use crate::scene::Scene;
 use crate::sim::{prepare, simulate, RunStats};
 use glam::Vec3;
@@ -248,8 +249,9 @@ fn scene_toml(
 pub const SETTLE_WINDOW: usize = 6;
 
 /// Settles `preset` (with its stretch stiffness replaced by `stretch`, N/m, where given) cut to
-/// `outline` with its warp `grain_deg` degrees from x (a membrane fabric) at `spacing` (m), with every particle whose rest position `held` accepts pinned,
-/// in `dir` (created). The specimen has settled once no particle moved more than `tolerance`
+/// `outline` with its warp `grain_deg` degrees from x (a membrane fabric) at `spacing` (m), with
+/// every particle whose rest position `held` accepts pinned, in `dir` (created), on the GPU
+/// path on `gpu` or else the CPU twin. The specimen has settled once no particle moved more than `tolerance`
 /// (m) over the last [`SETTLE_WINDOW`] frames. (A kinetic-energy rule does not serve here: the
 /// stiff wovens keep a jitter of about 1 mm/s in their in-plane springs long after their shape
 /// has stopped changing.)
@@ -262,6 +264,7 @@ pub fn settle(
     outline: Outline,
     spacing: f64,
     step: &Stepping,
+    gpu: Option<&GpuContext>,
     tolerance: f32,
     held: impl Fn(Vec3) -> bool,
 ) -> Result<Settled, Error> {
@@ -283,7 +286,7 @@ pub fn settle(
     write_atomic(&path, toml.as_bytes())?;
     let scene = Scene::parse(&toml, &path)?;
     let prep = prepare(&scene)?;
-    let mut solver = crate::run::build_solver(&prep, None)?;
+    let mut solver = crate::run::build_solver(&prep, gpu)?;
     let mut stats = RunStats::default();
     let mut recent: VecDeque<Vec<Vec3>> = VecDeque::new();
     let mut settled_frame = None;
