@@ -59,17 +59,27 @@ pub fn choose_device(
     choice: BackendChoice,
     adapter: &AdapterChoice,
 ) -> Result<(Option<GpuContext>, String), Error> {
-    let cpu = || (None, format!("CPU twin ({})", cpu_threads_description()));
+    let cpu = |why: &str| {
+        (
+            None,
+            format!("the CPU twin ({}){why}", cpu_threads_description()),
+        )
+    };
     let gpu = |ctx: GpuContext| {
         let d = ctx.report().describe();
         (Some(ctx), d)
     };
     Ok(match choice {
-        BackendChoice::Cpu => cpu(),
+        BackendChoice::Cpu => cpu(""),
         BackendChoice::Gpu => gpu(GpuContext::new(adapter)?),
         BackendChoice::Auto => match GpuContext::new(adapter) {
             Ok(ctx) if !ctx.is_software() || crate::run::adapter_named(adapter) => gpu(ctx),
-            _ => cpu(),
+            // Said in the report, so that a misspelt adapter is not a silent CPU run.
+            Ok(ctx) => cpu(&format!(
+                " (--backend auto: {} is a software adapter; name it with --adapter to use it)",
+                ctx.report().describe()
+            )),
+            Err(e) => cpu(&format!(" (--backend auto: no GPU: {e})")),
         },
     })
 }

@@ -240,8 +240,8 @@ struct FabricArgs {
     /// (`[fabric] compression`).
     #[arg(long, default_value = "linear", value_parser = ["linear", "buckling"])]
     compression: String,
-    /// cpu: the CPU twin (the reference figures); gpu; auto: a hardware GPU if there is one,
-    /// else the CPU.
+    /// cpu: the CPU twin (the book's figures); gpu: the GPU path on --adapter; auto: a hardware
+    /// GPU if there is one (a software adapter only when --adapter names it), else the CPU.
     #[arg(long, default_value = "cpu")]
     backend: BackendChoice,
     /// The GPU path's adapter: auto (honours WGPU_ADAPTER_NAME), fallback (software), or part
