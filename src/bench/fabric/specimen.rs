@@ -252,9 +252,9 @@ pub const SETTLE_WINDOW: usize = 6;
 /// `outline` with its warp `grain_deg` degrees from x (a membrane fabric) at `spacing` (m), with
 /// every particle whose rest position `held` accepts pinned, in `dir` (created), on the GPU
 /// path on `gpu` or else the CPU twin. The specimen has settled once no particle moved more
-/// than `tolerance` (m) over the last [`SETTLE_WINDOW`] frames. (A kinetic-energy rule does not serve here: the
-/// stiff wovens keep a jitter of about 1 mm/s in their in-plane springs long after their shape
-/// has stopped changing.)
+/// than `tolerance` (m) over the last [`SETTLE_WINDOW`] frames. (A kinetic-energy rule does
+/// not serve here: the stiff wovens keep a jitter of about 1 mm/s in their in-plane springs
+/// long after their shape has stopped changing.)
 #[allow(clippy::too_many_arguments)] // one specimen's whole description
 pub fn settle(
     dir: &Path,
