@@ -1,5 +1,6 @@
 //! What a finished run says about its result: seams left open, a body showing through the
-//! cloth, cloth that never came to rest. Each is a warning in the summary and on the terminal.
+//! cloth, cloth torn apart by a diverged step or thrown off the body, cloth that never came to
+//! rest. Each is a warning in the summary and on the terminal.
 
 use crate::metrics::{body_distances, deformed_distances, ShowThrough};
 use crate::sim::{Prepared, RunStats};
@@ -109,6 +110,12 @@ pub fn result_warnings(
             how_deep(s.deepest_m)
         ));
     }
+    if let Some(w) = torn_warning(stats) {
+        out.push(w);
+    }
+    if let Some(w) = fell_off_warning(prep, stats, finished) {
+        out.push(w);
+    }
     if let (Some(limit), None, true) = (prep.settle_speed, &stats.settled, finished) {
         let speed = stats.frame_speed_m_s.unwrap_or(f64::NAN);
         let residual = match (prep.settle_force_residual, stats.force_residual) {
@@ -125,6 +132,41 @@ pub fn result_warnings(
         ));
     }
     out
+}
+
+/// The largest strain of any output frame past which a result is not cloth: half its length
+/// again. Wovens stretch about 5% at the KES tensile test's largest load, garment leather breaks
+/// at about 15%, and a cotton knit is twelve times as stiff by 17% (docs/src/fabrics.md, the
+/// presets' strain scales); the soft 300 N/m thesis skirt stretched over the hips reached 24%.
+const TORN_STRAIN: f32 = 0.5;
+
+/// A frame whose cloth stretched past `TORN_STRAIN` somewhere: the step diverged there (or the
+/// seams were pulled shut at once), even if the cloth came back together later.
+fn torn_warning(stats: &RunStats) -> Option<String> {
+    (stats.max_edge_strain > TORN_STRAIN).then(|| {
+        format!(
+            "an edge stretched {:.0}% at some frame (largest strain of the run; {:.0}% is past \
+             what fabric survives): the step diverged there, or the seams were drawn shut at \
+             once, and the frames after it may show the cloth thrown about (fix: more Newton \
+             steps with [solver] iterations, or more substeps; for seams, a \
+             seam_sewing_time_s)",
+            100.0 * stats.max_edge_strain,
+            100.0 * TORN_STRAIN
+        )
+    })
+}
+
+/// A sewn garment that touches no body at the last frame, though gravity has been on: it was
+/// sewn around the body, so it has slid or been thrown off.
+fn fell_off_warning(prep: &Prepared, stats: &RunStats, finished: bool) -> Option<String> {
+    let loaded = stats.frames_run > prep.gravity.1 && prep.gravity.0 != glam::Vec3::ZERO;
+    let on_a_body = prep.garment.is_some() && !prep.model.colliders.is_empty();
+    (finished && loaded && on_a_body && stats.body_contacts == 0).then(|| {
+        "the garment touches no body at the last frame: it has slid or been thrown off (fix: \
+         check that the pattern fits the body, and that the run did not diverge: more Newton \
+         steps with [solver] iterations, or more substeps)"
+            .to_string()
+    })
 }
 
 /// "seam 3", "seams 1, 4 and 7" (1-based), at most 8 named.
