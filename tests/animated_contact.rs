@@ -291,11 +291,14 @@ fn tshirt_walk_short_stays_outside_the_deformed_body() {
         .fold(0.0f32, f32::max);
     eprintln!(
         "tshirt_walk (short): {} particles, {} frames in {:.1} s, deepest {deepest:.2e} m, {} \
-         touching at the end",
+         touching at the end, seam gaps up to {:.2e} m, strain {:.4} largest, {:.4} p99",
         prep.model.len(),
         frames.len() - 1,
         started.elapsed().as_secs_f32(),
-        stats.body_contacts
+        stats.body_contacts,
+        stats.seam_gaps.iter().fold(0.0f32, |a, &b| a.max(b)),
+        stats.last_edge_strain,
+        stats.last_edge_strain_p99
     );
     assert_eq!(stats.deformed_penetration_m.len(), frames.len() - 1);
     // The issue's criterion: no particle deeper than the thickness inside the exact deformed
