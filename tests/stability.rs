@@ -154,7 +154,8 @@ fn assert_healthy(case: &str, prep: &Prepared, o: &Outcome, strain: f32, extra: 
     }
 }
 
-/// The strain a frame may show with a body: the limit, plus what the body's projection can add
+/// The strain a frame may show with a body: the strain limit (0 when the scene has none, so
+/// then the bound is the projection's share alone), plus what the body's projection can add
 /// after the last strain-limit pass of a substep. `collide_body` moves a particle by at most
 /// the thickness (the substep rule keeps the surface from moving farther per substep), so an
 /// edge may grow by twice that.

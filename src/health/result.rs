@@ -137,7 +137,7 @@ pub fn result_warnings(
 /// The largest strain of any output frame past which a result is not cloth: half its length
 /// again. Wovens stretch about 5% at the KES tensile test's largest load, garment leather breaks
 /// at about 15%, and a cotton knit is twelve times as stiff by 17% (docs/src/fabrics.md, the
-/// presets' strain scales); the soft 300 N/m thesis skirt stretched over the hips reached 24%.
+/// presets' strain scales); the soft 300 N/m thesis skirt stretched over the hips reached 22%.
 const TORN_STRAIN: f32 = 0.5;
 
 /// A frame whose cloth stretched past `TORN_STRAIN` somewhere: the step diverged there (or the
@@ -147,8 +147,8 @@ fn torn_warning(stats: &RunStats) -> Option<String> {
         format!(
             "an edge stretched {:.0}% at some frame (largest strain of the run; {:.0}% is past \
              what fabric survives): the step diverged there, or the seams were drawn shut at \
-             once, and the frames after it may show the cloth thrown about (fix: more Newton \
-             steps with [solver] iterations, or more substeps; for seams, a \
+             once, and the frames after it may show the cloth thrown about (fix: more substeps, \
+             or with implicit Euler more Newton steps, [solver] iterations; for seams, a \
              seam_sewing_time_s)",
             100.0 * stats.max_edge_strain,
             100.0 * TORN_STRAIN
@@ -156,15 +156,19 @@ fn torn_warning(stats: &RunStats) -> Option<String> {
     })
 }
 
-/// A sewn garment that touches no body at the last frame, though gravity has been on: it was
-/// sewn around the body, so it has slid or been thrown off.
+/// A sewn garment that touches no body at the last frame, a second or more after its seams
+/// closed and gravity came on: it was sewn around the body and has had time to settle on it,
+/// so it has slid or been thrown off.
 fn fell_off_warning(prep: &Prepared, stats: &RunStats, finished: bool) -> Option<String> {
-    let loaded = stats.frames_run > prep.gravity.1 && prep.gravity.0 != glam::Vec3::ZERO;
+    let second = (1.0 / prep.frame_dt).round() as u32;
+    let sewn = stats.seams_closed_frame.map(|f| f.max(prep.gravity.1));
+    let loaded = prep.gravity.0 != glam::Vec3::ZERO
+        && sewn.is_some_and(|from| stats.frames_run >= from + second);
     let on_a_body = prep.garment.is_some() && !prep.model.colliders.is_empty();
     (finished && loaded && on_a_body && stats.body_contacts == 0).then(|| {
         "the garment touches no body at the last frame: it has slid or been thrown off (fix: \
-         check that the pattern fits the body, and that the run did not diverge: more Newton \
-         steps with [solver] iterations, or more substeps)"
+         check that the pattern fits the body, and that the run did not diverge: more \
+         substeps, or with implicit Euler more Newton steps, [solver] iterations)"
             .to_string()
     })
 }
