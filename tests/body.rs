@@ -576,8 +576,9 @@ fn rotating_skirt_stays_on_and_out_of_the_mannequin() {
     assert!(lowest_waist > 0.8, "the waistband fell to {lowest_waist} m");
     // With no strain cap, the seams are closed after the turns, and at the end no edge
     // stretches as far as the old 10% cap: the thesis's pattern, smaller than the hips,
-    // stretched its waist 22% and held its side seams 1.5 mm open. Measured on lavapipe: gaps 0.37 and 0.38 mm, the
-    // largest strain 7.8% (3.2% at the 99th percentile), the waist no lower than 0.819 m.
+    // stretched its waist 22% and held its side seams 1.5 mm open. Measured on lavapipe: gaps
+    // 0.37 and 0.38 mm, the largest strain 7.8% (3.2% at the 99th percentile), the waist no
+    // lower than 0.819 m.
     assert!(stats.strain_limit_clamped_edges.is_none(), "the cap is off");
     let gaps = &stats.seam_gaps;
     assert!(

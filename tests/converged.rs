@@ -331,11 +331,11 @@ fn newton_steps_and_multigrid_cycles_converge_alike_at_three_resolutions_where_s
     // is preconditioned by one V-cycle, so the first step's linear residual after its
     // LINEAR_ITERATIONS cycles gives the digits each cycle gains. Only the first step's: its
     // right-hand side is the sheet's whole weight, while later steps start near f32's rounding
-    // and stop at it (2e-7). Multigrid's rate must not depend on the mesh: within a factor 2 from 17² to 65²
-    // (measured: 0.59, 0.51 and 0.44 digits a cycle, a spread of 1.34). The linear-residual
-    // bound above already keeps every rate between 0.375 (1e-3 after 8 cycles) and about 0.84
-    // (f32's floor), a spread of at most 2.24, so this factor adds little to it; the rate that
-    // falls with the mesh is the sweeps', below.
+    // and stop at it (2e-7). Multigrid's rate must not depend on the mesh: within a factor 2
+    // from 17² to 65² (measured: 0.59, 0.51 and 0.44 digits a cycle, a spread of 1.34). The
+    // linear-residual bound above already keeps every rate between 0.375 (1e-3 after 8 cycles)
+    // and about 0.84 (f32's floor), a spread of at most 2.24, so this factor adds little to
+    // it; the rate that falls with the mesh is the sweeps', below.
     let rate = |digits: f64, cycles: f64| digits / cycles;
     let cycle_rates: Vec<f64> = [1, 2, 4]
         .iter()

@@ -202,11 +202,7 @@ fn trajectory_within_rounding_spread(prep: &Prepared) {
     let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
     let mut noisy = CpuSolver::new(&prep.model, prep.params, &prep.plan);
     let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
-    let start = cpu.state().unwrap();
-    let x_max = (start.positions.iter())
-        .map(|p| p.truncate().abs().max_element())
-        .fold(0.0, f32::max);
-    let noise = x_max * f32::EPSILON / 2.0;
+    let noise = one_rounding(&cpu.state().unwrap());
     let mut rng = common::Rng::new(5);
     for frame in 1..=3 {
         for (k, step) in substep_params(prep, frame).iter().enumerate() {
@@ -245,6 +241,15 @@ fn trajectory_within_rounding_spread(prep: &Prepared) {
     }
 }
 
+/// One rounding of the largest coordinate of `state`'s positions (2^-24 of it): the noise
+/// the trajectory tests start a CPU run from to show how far rounding alone parts two runs.
+fn one_rounding(state: &drapekit::solver::ParticleState) -> f32 {
+    let x_max = (state.positions.iter())
+        .map(|p| p.truncate().abs().max_element())
+        .fold(0.0, f32::max);
+    x_max * f32::EPSILON / 2.0
+}
+
 /// Runs 6 frames of `prep` three ways, each on its own from the start: on the CPU, on the GPU,
 /// and on the CPU from a start one rounding away, and compares the GPU's trajectory with the
 /// perturbed one's distance from the CPU's at every substep.
@@ -265,12 +270,10 @@ fn free_trajectory_within_rounding_spread(prep: &Prepared) {
     let mut noisy = CpuSolver::new(&prep.model, prep.params, &prep.plan);
     let mut gpu = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
     let mut start = cpu.state().unwrap();
-    let x_max = (start.positions.iter())
-        .map(|p| p.truncate().abs().max_element())
-        .fold(0.0, f32::max);
+    let noise = one_rounding(&start);
     let mut rng = common::Rng::new(5);
     for p in start.positions.iter_mut().filter(|p| p.w != 0.0) {
-        *p += rng.vec3(x_max * f32::EPSILON / 2.0).extend(0.0);
+        *p += rng.vec3(noise).extend(0.0);
     }
     noisy.set_state(&start);
     for frame in 1..=6 {

@@ -140,6 +140,10 @@ pub fn result_warnings(
 /// presets' strain scales); the soft 300 N/m thesis skirt stretched over the hips reached 22%.
 const TORN_STRAIN: f32 = 0.5;
 
+/// What holds a step that diverged, as the torn and thrown-off warnings advise it.
+const DIVERGED_FIX: &str = "more substeps, or with implicit Euler more Newton steps, [solver] \
+                            iterations";
+
 /// A frame whose cloth stretched past `TORN_STRAIN` somewhere: the step diverged there (or the
 /// seams were pulled shut at once), even if the cloth came back together later.
 fn torn_warning(stats: &RunStats) -> Option<String> {
@@ -147,9 +151,8 @@ fn torn_warning(stats: &RunStats) -> Option<String> {
         format!(
             "an edge stretched {:.0}% at some frame (largest strain of the run; {:.0}% is past \
              what fabric survives): the step diverged there, or the seams were drawn shut at \
-             once, and the frames after it may show the cloth thrown about (fix: more substeps, \
-             or with implicit Euler more Newton steps, [solver] iterations; for seams, a \
-             seam_sewing_time_s)",
+             once, and the frames after it may show the cloth thrown about (fix: \
+             {DIVERGED_FIX}; for seams, a seam_sewing_time_s)",
             100.0 * stats.max_edge_strain,
             100.0 * TORN_STRAIN
         )
@@ -166,10 +169,11 @@ fn fell_off_warning(prep: &Prepared, stats: &RunStats, finished: bool) -> Option
         && sewn.is_some_and(|from| stats.frames_run >= from + second);
     let on_a_body = prep.garment.is_some() && !prep.model.colliders.is_empty();
     (finished && loaded && on_a_body && stats.body_contacts == 0).then(|| {
-        "the garment touches no body at the last frame: it has slid or been thrown off (fix: \
-         check that the pattern fits the body, and that the run did not diverge: more \
-         substeps, or with implicit Euler more Newton steps, [solver] iterations)"
-            .to_string()
+        format!(
+            "the garment touches no body at the last frame: it has slid or been thrown off \
+             (fix: check that the pattern fits the body, and that the run did not diverge: \
+             {DIVERGED_FIX})"
+        )
     })
 }
 
