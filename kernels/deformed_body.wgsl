@@ -175,68 +175,132 @@ fn inverse3(a: mat3x3<f32>) -> Inverse {
     return Inverse(mat3x3<f32>(adj[0] / det, adj[1] / det, adj[2] / det), abs(det) > 1e-12);
 }
 
-// The deforming body's contact at world point x.
-fn deformed_sample(sdf: texture_2d<f32>, body: BodyParams, x: vec3<f32>) -> DeformedSample {
-    let l = deformed_layout(sdf, body);
-    var best = DeformedSample(SDF_FAR, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
-    for (var k = 0u; k < body.parts; k = k + 1u) {
-        let pose = step.parts[body.first_part + k];
-        let rel = x - pose.translation.xyz;
-        var y = vec3<f32>(dot(pose.x.xyz, rel), dot(pose.y.xyz, rel), dot(pose.z.xyz, rel));
-        let lo = body_word3(sdf, body, l.boxes + 6u * k);
-        let hi = body_word3(sdf, body, l.boxes + 6u * k + 3u);
-        if (any(y < lo) || any(y > hi)) {
-            continue;
-        }
-        var settled = false;
-        var last = vec3<f32>(0.0);
-        for (var r = 0u; r < DEFORMED_REFINEMENTS; r = r + 1u) {
-            let blend = blend_at(sdf, body, l, y, x);
-            if (!blend.valid) {
-                break;
-            }
-            let inv = inverse3(blend.a);
-            if (!inv.ok) {
-                break;
-            }
-            var step = inv.m * (x - blend.b) - y;
-            // A step that turns back on the last one is overshooting an oscillation: halve it.
-            if (dot(step, last) < 0.0) {
-                step = step * 0.5;
-            }
-            y = y + step;
-            last = step;
-            settled = true;
-            if (length(step) < DEFORMED_SETTLED_STEP) {
-                break;
-            }
-        }
-        if (!settled) {
-            continue;
-        }
+// The rest point that part k maps x back to (cpu: rest_point); ok is false where x is outside
+// the part's box or the refinement cannot start.
+struct RestPoint {
+    y: vec3<f32>,
+    ok: bool,
+}
+
+fn deformed_rest_point(sdf: texture_2d<f32>, body: BodyParams, l: DeformedLayout, k: u32, x: vec3<f32>) -> RestPoint {
+    let pose = step.parts[body.first_part + k];
+    let rel = x - pose.translation.xyz;
+    var y = vec3<f32>(dot(pose.x.xyz, rel), dot(pose.y.xyz, rel), dot(pose.z.xyz, rel));
+    let lo = body_word3(sdf, body, l.boxes + 6u * k);
+    let hi = body_word3(sdf, body, l.boxes + 6u * k + 3u);
+    if (any(y < lo) || any(y > hi)) {
+        return RestPoint(y, false);
+    }
+    var settled = false;
+    var last = vec3<f32>(0.0);
+    for (var r = 0u; r < DEFORMED_REFINEMENTS; r = r + 1u) {
         let blend = blend_at(sdf, body, l, y, x);
         if (!blend.valid) {
-            continue;
-        }
-        // Where the rest point skins to now; a candidate that has not settled within the
-        // thickness does not describe the surface near x.
-        if (length(blend.a * y + blend.b - x) > body.thickness) {
-            continue;
-        }
-        let s = sdf_sample(sdf, body.sdf_origin, body.sdf_dims, y);
-        if (s.w >= best.phi) {
-            continue;
+            break;
         }
         let inv = inverse3(blend.a);
         if (!inv.ok) {
-            continue;
+            break;
         }
-        let n = transpose(inv.m) * s.xyz;
-        let len = length(n);
-        if (len <= 1e-12) {
-            continue;
+        var step = inv.m * (x - blend.b) - y;
+        // A step that turns back on the last one is overshooting an oscillation: halve it.
+        if (dot(step, last) < 0.0) {
+            step = step * 0.5;
         }
-        best = DeformedSample(s.w, n / len, x, blend.linear, blend.angular);
+        y = y + step;
+        last = step;
+        settled = true;
+        if (length(step) < DEFORMED_SETTLED_STEP) {
+            break;
+        }
     }
-    return best;
+    return RestPoint(y, settled);
+}
+
+// One part's answer at x (cpu: Candidate): the sample from its rest point, and how far x is
+// from where the rest surface point nearest that rest point skins to; valid is false where the
+// part has none.
+struct DeformedCandidate {
+    sample: DeformedSample,
+    surface: f32,
+    valid: bool,
+}
+
+fn deformed_candidate(sdf: texture_2d<f32>, body: BodyParams, l: DeformedLayout, k: u32, x: vec3<f32>) -> DeformedCandidate {
+    var out = DeformedCandidate(DeformedSample(SDF_FAR, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0)), SDF_FAR, false);
+    let rest = deformed_rest_point(sdf, body, l, k, x);
+    if (!rest.ok) {
+        return out;
+    }
+    let y = rest.y;
+    let blend = blend_at(sdf, body, l, y, x);
+    if (!blend.valid) {
+        return out;
+    }
+    // Where the rest point skins to now; a candidate that has not settled within the
+    // thickness does not describe the surface near x.
+    if (length(blend.a * y + blend.b - x) > body.thickness) {
+        return out;
+    }
+    let s = sdf_sample(sdf, body.sdf_origin, body.sdf_dims, y);
+    let inv = inverse3(blend.a);
+    if (!inv.ok) {
+        return out;
+    }
+    let n = transpose(inv.m) * s.xyz;
+    let len = length(n);
+    if (len <= 1e-12) {
+        return out;
+    }
+    // The rest surface point nearest y (y − φ∇φ̂), skinned.
+    let g = length(s.xyz);
+    let on_rest = y - s.w * select(vec3<f32>(0.0), s.xyz / g, g > 0.0);
+    let b = blend_at(sdf, body, l, on_rest, x);
+    if (b.valid) {
+        out.surface = length(b.a * on_rest + b.b - x);
+    }
+    out.sample = DeformedSample(s.w, n / len, x, blend.linear, blend.angular);
+    out.valid = true;
+    return out;
+}
+
+// The deforming body's contact at world point x: of the parts' answers the smallest φ wins,
+// except an inside claim refuted by a part that has x outside and skinned a surface point to
+// within the claimed depth less the thickness (cpu: deformed_sample, which says why).
+fn deformed_sample(sdf: texture_2d<f32>, body: BodyParams, x: vec3<f32>) -> DeformedSample {
+    let l = deformed_layout(sdf, body);
+    let far = DeformedSample(SDF_FAR, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+    var deepest = far;
+    var shallowest = far;
+    var inside = false;
+    var outside = far;
+    var outside_surface = SDF_FAR;
+    for (var k = 0u; k < body.parts; k = k + 1u) {
+        let c = deformed_candidate(sdf, body, l, k, x);
+        if (!c.valid) {
+            continue;
+        }
+        let phi = c.sample.phi;
+        if (phi < 0.0) {
+            if (!inside || phi < deepest.phi) {
+                deepest = c.sample;
+            }
+            if (!inside || phi > shallowest.phi) {
+                shallowest = c.sample;
+            }
+            inside = true;
+        } else {
+            outside_surface = min(outside_surface, c.surface);
+            if (phi < outside.phi) {
+                outside = c.sample;
+            }
+        }
+    }
+    if (inside && -deepest.phi <= outside_surface + body.thickness) {
+        return deepest;
+    }
+    if (inside && -shallowest.phi <= outside_surface + body.thickness) {
+        return shallowest;
+    }
+    return outside;
 }

@@ -7,9 +7,11 @@
 //! of y's nearest rest triangle at its closest point): y is then where linear blend skinning
 //! takes the rest surface to x. Near a joint the plain iteration can oscillate about the fixed
 //! point and shrink slowly (by 0.85 per step at a shoulder mid-walk, leaving it 4 mm off after
-//! 12 steps); a step that turns back on the last one is halved, which lands near the middle. The rest SDF at y gives φ; A⁻ᵀ∇φ the normal. A candidate whose
-//! y does not skin back to within the thickness of x is dropped (the fixed point did not
-//! settle); of the rest, the smallest φ wins (the point is inside if any part says so).
+//! 12 steps); a step that turns back on the last one is halved, which lands near the middle.
+//! The rest SDF at y gives φ; A⁻ᵀ∇φ the normal. A candidate whose y does not skin back to
+//! within the thickness of x is dropped (the fixed point did not settle); of the rest, the
+//! smallest φ wins (the point is inside if any part says so), unless another part refutes that
+//! depth (`deformed_sample`).
 
 use super::collide_body::{body_velocity_at, to_body_frame};
 use crate::body::deformed_sdf::WEIGHT_WORDS;
@@ -213,9 +215,108 @@ fn inverse(a: Mat3) -> Option<Mat3> {
     (det.abs() > 1e-12).then(|| Mat3::from_cols(r0, r1, r2).transpose() / det)
 }
 
+/// One part's answer at x: the sample from its rest point y, and how far x is from where the
+/// rest surface point nearest y skins to (a point of the deformed surface, so x's true distance
+/// to that surface is at most this; `SDF_FAR` where it cannot be skinned).
+struct Candidate {
+    sample: DeformedSample,
+    surface: f32,
+}
+
+/// The rest point that part `k` maps x back to (its pose's inverse, then the skinning fixed
+/// point), `None` where x is outside the part's box or the refinement cannot start.
+fn rest_point(
+    body: &BodyParams,
+    parts: &[BodyPose],
+    w: &Words,
+    l: &Layout,
+    k: usize,
+    x: Vec3,
+) -> Option<Vec3> {
+    let (mut y, _) = to_body_frame(&parts[k], x);
+    let lo = w.vec3(l.boxes + 6 * k as u32);
+    let hi = w.vec3(l.boxes + 6 * k as u32 + 3);
+    if y.cmplt(lo).any() || y.cmpgt(hi).any() {
+        return None;
+    }
+    let mut settled = None;
+    let mut last = Vec3::ZERO;
+    for _ in 0..REFINEMENTS {
+        let Some(blend) = blend_at(body, parts, w, l, y, x) else {
+            break;
+        };
+        let Some(inv) = inverse(blend.a) else { break };
+        let mut step = inv * (x - blend.b) - y;
+        // A step that turns back on the last one is overshooting an oscillation (near a
+        // joint the weights change fast along the step): half of it lands near the middle.
+        if step.dot(last) < 0.0 {
+            step *= 0.5;
+        }
+        y += step;
+        last = step;
+        settled = Some(y);
+        if step.length() < SETTLED_STEP {
+            break;
+        }
+    }
+    settled
+}
+
+/// Part `k`'s answer at x, `None` where it has none (no settled rest point, or one that does
+/// not skin back to within the thickness of x).
+fn candidate(
+    body: &BodyParams,
+    parts: &[BodyPose],
+    w: &Words,
+    l: &Layout,
+    k: usize,
+    x: Vec3,
+) -> Option<Candidate> {
+    let y = rest_point(body, parts, w, l, k, x)?;
+    let blend = blend_at(body, parts, w, l, y, x)?;
+    // Where the rest point skins to now; a candidate that has not settled within the
+    // thickness does not describe the surface near x.
+    if (blend.a * y + blend.b - x).length() > body.thickness {
+        return None;
+    }
+    let dims = [body.sdf_dims[0], body.sdf_dims[1], body.sdf_dims[2]];
+    let s: Vec4 = sdf_sample(w.0, dims, v3(body.sdf_origin), body.sdf_origin[3], y);
+    let n = inverse(blend.a)?.transpose() * s.truncate();
+    let len = n.length();
+    if len <= 1e-12 {
+        return None;
+    }
+    // The rest surface point nearest y (y − φ∇φ̂), skinned.
+    let g = s.truncate().length();
+    let on_rest = y - s.w
+        * if g > 0.0 {
+            s.truncate() / g
+        } else {
+            Vec3::ZERO
+        };
+    let surface = blend_at(body, parts, w, l, on_rest, x)
+        .map_or(SDF_FAR, |b| (b.a * on_rest + b.b - x).length());
+    let sample = DeformedSample {
+        phi: s.w,
+        normal: n / len,
+        center: x,
+        linear: blend.linear,
+        angular: blend.angular,
+    };
+    Some(Candidate { sample, surface })
+}
+
 /// The body's contact at world point `x`. `parts` are the body's own parts' poses (its slice of
 /// `SubstepParams::parts`), `words` its rest SDF's nodes followed by the words of
 /// `body::deformed_sdf`.
+///
+/// Of the parts' answers, the smallest φ wins (x is inside if any part says so), except an
+/// inside claim that another part refutes: linear blend skinning folds near a bending joint
+/// (a hip flexed mid-stride), where a rest point 4 cm inside the thigh skins to a point the
+/// deformed surface has 4 mm outside. A depth d claims no surface within d of x; a part that
+/// has x outside and skinned a surface point to within d − thickness of x shows the claim
+/// false. The deepest inside claim not refuted wins (or, if it is, the shallowest), else the
+/// nearest outside one.
 pub fn deformed_sample(
     body: &BodyParams,
     parts: &[BodyPose],
@@ -224,65 +325,30 @@ pub fn deformed_sample(
 ) -> DeformedSample {
     let w = Words(words);
     let l = layout(body, &w);
-    let mut best = DeformedSample::FAR;
-    for (k, pose) in parts.iter().enumerate().take(body.parts as usize) {
-        let (mut y, _) = to_body_frame(pose, x);
-        let lo = w.vec3(l.boxes + 6 * k as u32);
-        let hi = w.vec3(l.boxes + 6 * k as u32 + 3);
-        if y.cmplt(lo).any() || y.cmpgt(hi).any() {
+    let (mut deepest, mut shallowest, mut outside) = (None, None, None);
+    let mut outside_surface = SDF_FAR;
+    for k in 0..(body.parts as usize).min(parts.len()) {
+        let Some(c) = candidate(body, parts, &w, &l, k, x) else {
             continue;
-        }
-        let mut settled = None;
-        let mut last = Vec3::ZERO;
-        for _ in 0..REFINEMENTS {
-            let Some(blend) = blend_at(body, parts, &w, &l, y, x) else {
-                break;
-            };
-            let Some(inv) = inverse(blend.a) else { break };
-            let mut step = inv * (x - blend.b) - y;
-            // A step that turns back on the last one is overshooting an oscillation (near a
-            // joint the weights change fast along the step): half of it lands near the middle.
-            if step.dot(last) < 0.0 {
-                step *= 0.5;
+        };
+        let phi = c.sample.phi;
+        if phi < 0.0 {
+            if deepest.is_none_or(|d: DeformedSample| phi < d.phi) {
+                deepest = Some(c.sample);
             }
-            y += step;
-            last = step;
-            settled = Some(());
-            if step.length() < SETTLED_STEP {
-                break;
+            if shallowest.is_none_or(|d: DeformedSample| phi > d.phi) {
+                shallowest = Some(c.sample);
+            }
+        } else {
+            outside_surface = outside_surface.min(c.surface);
+            if outside.is_none_or(|d: DeformedSample| phi < d.phi) {
+                outside = Some(c.sample);
             }
         }
-        if settled.is_none() {
-            continue;
-        }
-        let Some(blend) = blend_at(body, parts, &w, &l, y, x) else {
-            continue;
-        };
-        // Where the rest point skins to now; a candidate that has not settled within the
-        // thickness does not describe the surface near x.
-        if (blend.a * y + blend.b - x).length() > body.thickness {
-            continue;
-        }
-        let dims = [body.sdf_dims[0], body.sdf_dims[1], body.sdf_dims[2]];
-        let s: Vec4 = sdf_sample(words, dims, v3(body.sdf_origin), body.sdf_origin[3], y);
-        if s.w >= best.phi {
-            continue;
-        }
-        let Some(inv) = inverse(blend.a) else {
-            continue;
-        };
-        let n = inv.transpose() * s.truncate();
-        let len = n.length();
-        if len <= 1e-12 {
-            continue;
-        }
-        best = DeformedSample {
-            phi: s.w,
-            normal: n / len,
-            center: x,
-            linear: blend.linear,
-            angular: blend.angular,
-        };
     }
-    best
+    let stands = |s: &DeformedSample| -s.phi <= outside_surface + body.thickness;
+    (deepest.filter(stands))
+        .or(shallowest.filter(stands))
+        .or(outside)
+        .unwrap_or(DeformedSample::FAR)
 }
