@@ -64,7 +64,6 @@ fn textures_and_buffers_give_the_same_bits_for_every_stage() {
     assert_eq!(buffers.report().array_layout.as_deref(), Some("buffers"));
     // Between them these plans hold every stage (checked below): springs, bending, wind,
     // strain limit, symplectic and explicit integration; seams and self-collision; a body;
-    // implicit Euler's Newton solve with contact; the membrane.
     // implicit Euler's Newton solve with contact; the membrane, explicit and implicit.
     let load = |path: &str| Scene::load(&fixture(path)).unwrap();
     let mut membrane = common::scene_with_fabric("scenes/hanging_cloth.toml", MEMBRANE);
