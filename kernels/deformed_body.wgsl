@@ -217,12 +217,12 @@ fn deformed_rest_point(sdf: texture_2d<f32>, body: BodyParams, l: DeformedLayout
     return RestPoint(y, settled);
 }
 
-// One part's answer at x (cpu: Candidate): the sample from its rest point, and how far x is
-// from where the rest surface point nearest that rest point skins to; valid is false where the
-// part has none.
+// One part's answer at x (cpu: Candidate): the sample from its rest point and, where the part
+// has x outside, how far x is from where the rest surface point nearest that rest point skins
+// to (SDF_FAR: not computed, or it cannot be skinned); valid is false where the part has none.
 struct DeformedCandidate {
     sample: DeformedSample,
-    surface: f32,
+    surface_distance: f32,
     valid: bool,
 }
 
@@ -252,12 +252,14 @@ fn deformed_candidate(sdf: texture_2d<f32>, body: BodyParams, l: DeformedLayout,
     if (len <= 1e-12) {
         return out;
     }
-    // The rest surface point nearest y (y − φ∇φ̂), skinned.
-    let g = length(s.xyz);
-    let on_rest = y - s.w * select(vec3<f32>(0.0), s.xyz / g, g > 0.0);
-    let b = blend_at(sdf, body, l, on_rest, x);
-    if (b.valid) {
-        out.surface = length(b.a * on_rest + b.b - x);
+    // Outside: the rest surface point nearest y (y − φ∇φ̂), skinned.
+    if (s.w >= 0.0) {
+        let g = length(s.xyz);
+        let on_rest = y - s.w * select(vec3<f32>(0.0), s.xyz / g, g > 0.0);
+        let at_surface = blend_at(sdf, body, l, on_rest, x);
+        if (at_surface.valid) {
+            out.surface_distance = length(at_surface.a * on_rest + at_surface.b - x);
+        }
     }
     out.sample = DeformedSample(s.w, n / len, x, blend.linear, blend.angular);
     out.valid = true;
@@ -266,7 +268,8 @@ fn deformed_candidate(sdf: texture_2d<f32>, body: BodyParams, l: DeformedLayout,
 
 // The deforming body's contact at world point x: of the parts' answers the smallest φ wins,
 // except an inside claim refuted by a part that has x outside and skinned a surface point to
-// within the claimed depth less the thickness (cpu: deformed_sample, which says why).
+// within the claimed depth less the thickness; the deepest claim if it stands, else the
+// shallowest, else the nearest outside answer (cpu: deformed_sample, which says why).
 fn deformed_sample(sdf: texture_2d<f32>, body: BodyParams, x: vec3<f32>) -> DeformedSample {
     let l = deformed_layout(sdf, body);
     let far = DeformedSample(SDF_FAR, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
@@ -274,7 +277,7 @@ fn deformed_sample(sdf: texture_2d<f32>, body: BodyParams, x: vec3<f32>) -> Defo
     var shallowest = far;
     var inside = false;
     var outside = far;
-    var outside_surface = SDF_FAR;
+    var nearest_skinned_surface = SDF_FAR;
     for (var k = 0u; k < body.parts; k = k + 1u) {
         let c = deformed_candidate(sdf, body, l, k, x);
         if (!c.valid) {
@@ -290,16 +293,16 @@ fn deformed_sample(sdf: texture_2d<f32>, body: BodyParams, x: vec3<f32>) -> Defo
             }
             inside = true;
         } else {
-            outside_surface = min(outside_surface, c.surface);
+            nearest_skinned_surface = min(nearest_skinned_surface, c.surface_distance);
             if (phi < outside.phi) {
                 outside = c.sample;
             }
         }
     }
-    if (inside && -deepest.phi <= outside_surface + body.thickness) {
+    if (inside && -deepest.phi <= nearest_skinned_surface + body.thickness) {
         return deepest;
     }
-    if (inside && -shallowest.phi <= outside_surface + body.thickness) {
+    if (inside && -shallowest.phi <= nearest_skinned_surface + body.thickness) {
         return shallowest;
     }
     return outside;

@@ -119,8 +119,8 @@ fn state_at(prep: &Prepared, points: &[Vec3]) -> ParticleState {
 /// `tol`, or at a point within `reach` of x. The fixed point stops at the first step shorter
 /// than SETTLED_STEP, so the two backends may stop one refinement apart, SETTLED_STEP from each
 /// other in the rest pose; where that distance crosses a discontinuity of the query (another
-/// grid node's nearest triangle, an SDF cell face, a part's box, another part winning), the GPU
-/// answers for a neighbour of x, which is what `reach` admits.
+/// grid node's nearest triangle, an SDF cell face, a part's box, another part winning, a depth
+/// refuted or not), the GPU answers for a neighbour of x, which is what `reach` admits.
 fn matches(
     cpu: impl Fn(Vec3) -> DeformedSample,
     x: Vec3,
@@ -189,6 +189,10 @@ fn contact_planes_parity(
     stage: &str,
 ) {
     let step = step_at(prep, t);
+    assert!(
+        points.len() <= prep.model.len(),
+        "more points than particles"
+    );
     let state = state_at(prep, points);
     let mut g = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
     g.set_state(&state);
@@ -205,7 +209,7 @@ fn contact_planes_parity(
     let body = prep.params.bodies[0];
     let words = &prep.model.colliders[0].sdf.values;
     let cpu = |x: Vec3| deformed_sample(&body, &step.parts, words, x);
-    let (tol, reach) = tolerances();
+    let (tol, reach) = tolerances(prep.model.colliders[0].sdf.cell);
     let (mut exact, mut neighbour, mut inside) = (0, 0, 0);
     let (mut dphi, mut dn) = (0.0f32, 0.0f32);
     for (i, x) in points.iter().enumerate().take(n) {
@@ -258,7 +262,7 @@ fn parity_collide_body_deforming_body() {
     );
     let body = prep.params.bodies[0];
     let cpu_sample = |x: Vec3| deformed_sample(&body, &step.parts, words[0], x);
-    let (tol, reach) = tolerances();
+    let (tol, reach) = tolerances(prep.model.colliders[0].sdf.cell);
     let (mut exact, mut neighbour, mut inside) = (0, 0, 0);
     let (mut moved, mut dx_max, mut dv_max) = (0, 0.0f32, 0.0f32);
     for (i, x) in points.iter().enumerate() {
@@ -340,18 +344,19 @@ fn neighbour_left(
 ///   bends), moves by ≤ 1.5·SETTLED_STEP, plus the interpolation's rounding (a few ε of node
 ///   values ≤ 1 m): 2e-5 m bounds it;
 /// - the trilinear gradient changes within a cell by at most ~2 (its value across a cell at a
-///   sharp crease) over the 1 cm cell, so by 2·SETTLED_STEP/1 cm = 2e-3 for that shift, and
-///   A⁻ᵀ turns it by what the skin weights change: their barycentric coordinates move by
-///   SETTLED_STEP over a rest edge (≥ 5 mm), 2e-3, times the parts' rotations' differences
-///   (≤ 2): 4e-3; together 6e-3 on a unit normal;
+///   sharp crease) over the `cell`, so by 2·SETTLED_STEP/cell for that shift (2e-3 at 1 cm,
+///   4e-3 at 5 mm), and A⁻ᵀ turns it by what the skin weights change: their barycentric
+///   coordinates move by SETTLED_STEP over a rest edge (≥ 5 mm), 2e-3, times the parts'
+///   rotations' differences (≤ 2): 4e-3; together 6e-3 (1 cm) or 8e-3 (5 mm) on a unit normal;
 /// - the blended surface velocity changes by the same 2e-3 of the weights times the parts'
 ///   velocities' spread (the walk's limbs move at ≤ 3 m/s against the torso): 6e-3 m/s.
 ///
 /// Where the SETTLED_STEP shift crosses a discontinuity, the neighbour within 2·SETTLED_STEP
 /// (x moves y about one to one: the parts are rigid) is what the GPU answered for.
-fn tolerances() -> ((f32, f32, f32), f32) {
+fn tolerances(cell: f32) -> ((f32, f32, f32), f32) {
     let settled = drapekit::cpu::SETTLED_STEP;
-    ((2e-5, 6e-3, 6e-3), 2.0 * settled)
+    let normal = 2.0 * settled / cell + 4e-3;
+    ((2e-5, normal, 6e-3), 2.0 * settled)
 }
 
 /// Prints the counts and checks that answers for a neighbour stay rare: a discontinuity is

@@ -10,8 +10,8 @@
 //! 12 steps); a step that turns back on the last one is halved, which lands near the middle.
 //! The rest SDF at y gives φ; A⁻ᵀ∇φ the normal. A candidate whose y does not skin back to
 //! within the thickness of x is dropped (the fixed point did not settle); of the rest, the
-//! smallest φ wins (the point is inside if any part says so), unless another part refutes that
-//! depth (`deformed_sample`).
+//! smallest φ wins (the point is inside if any part says so and no other part refutes that
+//! depth: `deformed_sample`).
 
 use super::collide_body::{body_velocity_at, to_body_frame};
 use crate::body::deformed_sdf::WEIGHT_WORDS;
@@ -215,12 +215,13 @@ fn inverse(a: Mat3) -> Option<Mat3> {
     (det.abs() > 1e-12).then(|| Mat3::from_cols(r0, r1, r2).transpose() / det)
 }
 
-/// One part's answer at x: the sample from its rest point y, and how far x is from where the
-/// rest surface point nearest y skins to (a point of the deformed surface, so x's true distance
-/// to that surface is at most this; `SDF_FAR` where it cannot be skinned).
+/// One part's answer at x: the sample from its rest point y and, where the part has x outside,
+/// how far x is from where the rest surface point nearest y skins to. That point lies on the
+/// deformed surface (up to the SDF's interpolation and the weights' blend), so x's true distance
+/// to the surface is at most about this (`SDF_FAR`: not computed, or it cannot be skinned).
 struct Candidate {
     sample: DeformedSample,
-    surface: f32,
+    surface_distance: f32,
 }
 
 /// The rest point that part `k` maps x back to (its pose's inverse, then the skinning fixed
@@ -286,16 +287,20 @@ fn candidate(
     if len <= 1e-12 {
         return None;
     }
-    // The rest surface point nearest y (y − φ∇φ̂), skinned.
-    let g = s.truncate().length();
-    let on_rest = y - s.w
-        * if g > 0.0 {
+    // Outside: the rest surface point nearest y (y − φ∇φ̂), skinned.
+    let mut surface_distance = SDF_FAR;
+    if s.w >= 0.0 {
+        let g = s.truncate().length();
+        let to_surface = if g > 0.0 {
             s.truncate() / g
         } else {
             Vec3::ZERO
         };
-    let surface = blend_at(body, parts, w, l, on_rest, x)
-        .map_or(SDF_FAR, |b| (b.a * on_rest + b.b - x).length());
+        let on_rest = y - s.w * to_surface;
+        if let Some(b) = blend_at(body, parts, w, l, on_rest, x) {
+            surface_distance = (b.a * on_rest + b.b - x).length();
+        }
+    }
     let sample = DeformedSample {
         phi: s.w,
         normal: n / len,
@@ -303,7 +308,10 @@ fn candidate(
         linear: blend.linear,
         angular: blend.angular,
     };
-    Some(Candidate { sample, surface })
+    Some(Candidate {
+        sample,
+        surface_distance,
+    })
 }
 
 /// The body's contact at world point `x`. `parts` are the body's own parts' poses (its slice of
@@ -311,12 +319,15 @@ fn candidate(
 /// `body::deformed_sdf`.
 ///
 /// Of the parts' answers, the smallest φ wins (x is inside if any part says so), except an
-/// inside claim that another part refutes: linear blend skinning folds near a bending joint
-/// (a hip flexed mid-stride), where a rest point 4 cm inside the thigh skins to a point the
-/// deformed surface has 4 mm outside. A depth d claims no surface within d of x; a part that
-/// has x outside and skinned a surface point to within d − thickness of x shows the claim
-/// false. The deepest inside claim not refuted wins (or, if it is, the shallowest), else the
-/// nearest outside one.
+/// inside claim that another part refutes. Linear blend skinning folds where a joint bends far
+/// (a knee flexed mid-stride): there a rest point 3.9 cm inside the leg skins to a point that
+/// the deformed mesh has 3.6 mm outside. A depth d claims that no surface lies within d of x;
+/// a part that has x outside and skinned a surface point to within d − thickness of x shows the
+/// claim false. The margin is the thickness because the distances compared are approximate
+/// (trilinear φ, blended weights) to a millimetre or so, and a claim no deeper than the layer
+/// only moves cloth within it. The deepest inside claim wins if it stands, else the shallowest
+/// if it does (a third claim between them is not tried: refutation drops the deepest first, and
+/// the shallowest moves cloth least), else the nearest outside answer.
 pub fn deformed_sample(
     body: &BodyParams,
     parts: &[BodyPose],
@@ -325,8 +336,9 @@ pub fn deformed_sample(
 ) -> DeformedSample {
     let w = Words(words);
     let l = layout(body, &w);
-    let (mut deepest, mut shallowest, mut outside) = (None, None, None);
-    let mut outside_surface = SDF_FAR;
+    let (mut deepest, mut shallowest) = (None, None);
+    let mut outside = DeformedSample::FAR;
+    let mut nearest_skinned_surface = SDF_FAR;
     for k in 0..(body.parts as usize).min(parts.len()) {
         let Some(c) = candidate(body, parts, &w, &l, k, x) else {
             continue;
@@ -340,15 +352,14 @@ pub fn deformed_sample(
                 shallowest = Some(c.sample);
             }
         } else {
-            outside_surface = outside_surface.min(c.surface);
-            if outside.is_none_or(|d: DeformedSample| phi < d.phi) {
-                outside = Some(c.sample);
+            nearest_skinned_surface = nearest_skinned_surface.min(c.surface_distance);
+            if phi < outside.phi {
+                outside = c.sample;
             }
         }
     }
-    let stands = |s: &DeformedSample| -s.phi <= outside_surface + body.thickness;
+    let stands = |s: &DeformedSample| -s.phi <= nearest_skinned_surface + body.thickness;
     (deepest.filter(stands))
         .or(shallowest.filter(stands))
-        .or(outside)
-        .unwrap_or(DeformedSample::FAR)
+        .unwrap_or(outside)
 }
