@@ -146,6 +146,9 @@ pub fn adapter_named(adapter: &AdapterChoice) -> bool {
         || std::env::var("WGPU_ADAPTER_NAME").is_ok_and(|name| !name.is_empty())
 }
 
+/// Each simulated frame's settle figures (`RunStats::frames_csv`), in the run's folder.
+pub const FRAMES_CSV: &str = "frames.csv";
+
 /// Runs a scene and writes its frames and `summary.json`. Bad input fails before anything is
 /// written. A run that goes non-finite still writes its summary (with `finite: false` and the
 /// error) before returning the error.
@@ -448,6 +451,8 @@ fn run_scene_from(
         warnings.extend(previews.warnings);
         outputs.extend(previews.names);
     }
+    write_atomic(&out_dir.join(FRAMES_CSV), stats.frames_csv().as_bytes())?;
+    outputs.push(FRAMES_CSV.to_string());
     outputs.push("summary.json".to_string());
     let substeps_run = stats.frames_run as f64 * prep.substeps as f64;
     let first_body = prep.model.colliders.first();
@@ -680,6 +685,7 @@ fn coarse_start(
         max_pattern_gap_m: gap,
     };
     let continued = RunStats {
+        frames: stats.frames,
         frames_run: frame,
         wall_seconds,
         finite: true,

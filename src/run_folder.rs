@@ -70,6 +70,7 @@ pub fn is_run_file(name: &str) -> bool {
     matches!(
         name,
         "summary.json"
+            | "frames.csv"
             | SCENE_COPY
             | "checkpoint.bin"
             | "cloth.pc2"
@@ -216,6 +217,7 @@ mod tests {
             "preview_strain_0024.png",
             "preview.gif",
             "summary.json",
+            "frames.csv",
             "scene.toml",
             "garment.glb",
         ] {

@@ -61,9 +61,9 @@ fn run_writes_frames_and_a_complete_summary() {
         summary["passes"],
         serde_json::json!(["hinge_forces", "spring_forces", "integrate", "strain_limit"])
     );
-    // The scene's copy, frames 0..=3 and the summary, and each listed file exists.
+    // The scene's copy, frames 0..=3, frames.csv and the summary, and each listed file exists.
     let outputs = summary["outputs"].as_array().unwrap();
-    assert_eq!(outputs.len(), 6);
+    assert_eq!(outputs.len(), 7);
     for f in outputs {
         assert!(out.join(f.as_str().unwrap()).is_file(), "{f} missing");
     }
@@ -219,6 +219,10 @@ fn an_exploded_frame_stops_the_run_and_is_not_written() {
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
     assert!(summary["max_edge_strain"].as_f64().unwrap() <= 5.0);
+    // frames.csv is written too, with a row for each good frame and none for the exploded one.
+    let frames = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let good = summary["frames"].as_u64().unwrap() as usize;
+    assert_eq!(frames.lines().count(), 1 + good, "{frames}");
 }
 
 /// A solver whose state turns NaN after its first advance.

@@ -144,7 +144,68 @@ fn run_coarse_started_shirt(backend: &[&str], tag: &str) -> serde_json::Value {
     // The full mesh's rate counts its own frames and time only.
     assert!(f(&summary["wall_seconds"]) > f(&coarse["wall_seconds"]));
     assert!(f(&summary["particle_substeps_per_second"]) > 0.0);
+    check_frames_csv(&out, &summary);
     summary
+}
+
+/// `frames.csv` of a coarse-started run: a row for every frame, the coarse start's then the
+/// full mesh's, that agrees with the summary to the last digit, and whose rows before the
+/// settled frame each fail the settle rule (else it would have fired there).
+fn check_frames_csv(out: &Path, summary: &serde_json::Value) {
+    let outputs = summary["outputs"].as_array().unwrap();
+    assert!(outputs.iter().any(|o| o == "frames.csv"), "{summary:#}");
+    let text = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some(
+            "frame,particles,rms_speed_m_s,force_residual_max,force_residual_rms,\
+             max_edge_strain,max_seam_gap_m,body_contacts"
+        )
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    let number = |v: &serde_json::Value| v.as_f64().unwrap();
+    let start = number(&summary["coarse_start"]["frame"]) as usize;
+    let settled = number(&summary["settled"]["frame"]) as usize;
+    assert_eq!(rows.len(), settled, "one row a frame");
+    let coarse_particles = number(&summary["coarse_start"]["particles"]);
+    for (k, row) in rows.iter().enumerate() {
+        assert_eq!(row[0], (k + 1) as f64, "frames in order");
+        let particles = if k < start {
+            coarse_particles
+        } else {
+            number(&summary["particles"])
+        };
+        assert_eq!(row[1], particles, "frame {}", k + 1);
+    }
+    // Each figure is written in its shortest exact form, as the summary writes it.
+    let last = &rows[settled - 1];
+    assert_eq!(last[2], number(&summary["last_frame_rms_speed_m_s"]));
+    assert_eq!(
+        last[4] as f32,
+        number(&summary["force_residual_rms"]) as f32
+    );
+    assert_eq!(
+        last[5] as f32,
+        number(&summary["last_frame_max_edge_strain"]) as f32
+    );
+    assert_eq!(last[6] as f32, number(&summary["max_seam_gap_m"]) as f32);
+    assert_eq!(last[7], number(&summary["body_contacts"]));
+    let full_mesh_largest = rows[start..].iter().map(|r| r[5]).fold(0.0, f64::max);
+    assert_eq!(
+        full_mesh_largest as f32,
+        number(&summary["max_edge_strain"]) as f32
+    );
+    // The shipped 2 cm shirt's rule: 5 mm/s, and 5% of the weight.
+    for row in &rows[start..settled - 1] {
+        assert!(
+            row[2] >= 0.005 || row[4] > 0.05,
+            "frame {} meets the rule",
+            row[0]
+        );
+    }
 }
 
 #[test]
@@ -229,6 +290,11 @@ fn a_resumed_coarse_started_run_repeats_the_uninterrupted_one() {
         }
         assert_eq!(pair[0], pair[1], "{key}");
     }
+    assert_eq!(
+        std::fs::read_to_string(whole.join("frames.csv")).unwrap(),
+        std::fs::read_to_string(parts.join("frames.csv")).unwrap(),
+        "frames.csv"
+    );
     let last = format!("frame_{:04}.obj", a["frames"].as_u64().unwrap());
     assert_eq!(
         std::fs::read(whole.join(&last)).unwrap(),

@@ -23,7 +23,7 @@ pub use bodies::{body_pose, part_poses};
 pub use coarse::{map_state, CoarseStart};
 use settle::frame_speed;
 pub use settle::Settled;
-pub use stats::RunStats;
+pub use stats::{FrameRecord, RunStats};
 use std::time::Instant;
 
 /// Fraction of the estimated stable step that `substeps = "auto"` uses.
@@ -650,6 +650,15 @@ pub fn simulate_from(
         if !stats.seam_gaps.is_empty() && all_closed && stats.seams_closed_frame.is_none() {
             stats.seams_closed_frame = Some(frame);
         }
+        stats.frames.push(FrameRecord {
+            frame,
+            particles: prep.model.len(),
+            rms_speed_m_s: stats.frame_speed_m_s.unwrap_or(0.0),
+            force_residual: stats.force_residual,
+            max_edge_strain: strain,
+            max_seam_gap_m: stats.seam_gaps.iter().fold(0.0, |a, &g| a.max(g)),
+            body_contacts: stats.body_contacts,
+        });
         on_frame(frame, &state, stats)?;
         let next = phase_params(prep, frame, stats);
         if next != params {

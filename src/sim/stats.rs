@@ -70,4 +70,52 @@ pub struct RunStats {
     /// the exact deformed mesh, in m.
     #[serde(default)]
     pub deformed_penetration_m: Vec<(u32, f32)>,
+    /// Each simulated frame's settle figures, a coarse start's first (`frames.csv`).
+    #[serde(default)]
+    pub frames: Vec<FrameRecord>,
+}
+
+/// One simulated frame's figures: what the settle rule reads, and what holds the cloth.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrameRecord {
+    /// The output frame.
+    pub frame: u32,
+    /// The mesh's particles (a coarse start's frames have fewer).
+    pub particles: usize,
+    /// The free particles' RMS speed over the frame (`frame_speed`), in m/s.
+    pub rms_speed_m_s: f64,
+    /// With implicit Euler, the force residual |f|/(m·g) at the frame's end: largest and RMS.
+    pub force_residual: Option<(f32, f32)>,
+    /// The largest spring strain.
+    pub max_edge_strain: f32,
+    /// The widest seam gap, in m (0 without seams).
+    pub max_seam_gap_m: f32,
+    /// Particles resting on a body.
+    pub body_contacts: usize,
+}
+
+impl RunStats {
+    /// `frames` as CSV, a header first; a figure the run does not have is left empty.
+    pub fn frames_csv(&self) -> String {
+        let mut csv = String::from(
+            "frame,particles,rms_speed_m_s,force_residual_max,force_residual_rms,\
+             max_edge_strain,max_seam_gap_m,body_contacts\n",
+        );
+        for r in &self.frames {
+            let (largest, rms) = match r.force_residual {
+                Some((largest, rms)) => (largest.to_string(), rms.to_string()),
+                None => (String::new(), String::new()),
+            };
+            csv += &format!(
+                "{},{},{},{largest},{rms},{},{},{}\n",
+                r.frame,
+                r.particles,
+                r.rms_speed_m_s,
+                r.max_edge_strain,
+                r.max_seam_gap_m,
+                r.body_contacts
+            );
+        }
+        csv
+    }
 }
