@@ -154,58 +154,6 @@ pub fn closest_barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     Vec3::new(1.0 - v - w, v, w)
 }
 
-/// The skin weights at rest point `y` (those at the closest point of the triangle nearest to
-/// y's grid node), blended over the parts' poses; `None` outside the grid.
-fn blend_at(
-    body: &BodyParams,
-    parts: &[BodyPose],
-    w: &Words,
-    l: &Layout,
-    y: Vec3,
-    x: Vec3,
-) -> Option<Blend> {
-    let d = body.sdf_dims;
-    let g = (y - v3(body.sdf_origin)) / body.sdf_origin[3];
-    let last = Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) - Vec3::ONE;
-    if g.cmplt(Vec3::ZERO).any() || g.cmpgt(last).any() {
-        return None;
-    }
-    let c = (g + Vec3::splat(0.5)).floor().min(last).as_uvec3();
-    let node = c.x + d[0] * (c.y + d[1] * c.z);
-    let t = w.u(l.nodes + node);
-    let corner = |k: u32| w.u(l.triangles + 3 * t + k);
-    let (ia, ib, ic) = (corner(0), corner(1), corner(2));
-    let (a, b, cc) = (
-        w.vec3(l.vertices + 3 * ia),
-        w.vec3(l.vertices + 3 * ib),
-        w.vec3(l.vertices + 3 * ic),
-    );
-    let bary = closest_barycentric(y, a, b, cc);
-    let mut out = Blend {
-        a: Mat3::ZERO,
-        b: Vec3::ZERO,
-        linear: Vec3::ZERO,
-        angular: Vec3::ZERO,
-    };
-    for (k, vertex) in [ia, ib, ic].into_iter().enumerate() {
-        let base = l.weights + WEIGHT_WORDS as u32 * vertex;
-        let packed = w.u(base);
-        for slot in 0..4u32 {
-            let weight = bary[k] * w.f(base + 1 + slot);
-            if weight == 0.0 {
-                continue;
-            }
-            let pose = &parts[((packed >> (8 * slot)) & 0xff) as usize];
-            out.a += Mat3::from_cols(v3(pose.x), v3(pose.y), v3(pose.z)) * weight;
-            out.b += v3(pose.translation) * weight;
-            let offset = x - v3(pose.translation);
-            out.linear += body_velocity_at(pose, offset) * weight;
-            out.angular += v3(pose.angular_velocity) * weight;
-        }
-    }
-    Some(out)
-}
-
 /// A⁻¹ through the adjugate (as the kernel, which has no matrix inverse); `None` when singular.
 fn inverse(a: Mat3) -> Option<Mat3> {
     let (c0, c1, c2) = (a.x_axis, a.y_axis, a.z_axis);
@@ -224,72 +172,139 @@ struct Candidate {
     surface_distance: f32,
 }
 
-/// The rest point that part `k` maps x back to (its pose's inverse, then the skinning fixed
-/// point), `None` where x is outside the part's box or the refinement cannot start.
-fn rest_point(
-    body: &BodyParams,
-    parts: &[BodyPose],
-    w: &Words,
-    l: &Layout,
-    k: usize,
-    x: Vec3,
-) -> Option<Vec3> {
-    let (mut y, _) = to_body_frame(&parts[k], x);
-    let lo = w.vec3(l.boxes + 6 * k as u32);
-    let hi = w.vec3(l.boxes + 6 * k as u32 + 3);
-    if y.cmplt(lo).any() || y.cmpgt(hi).any() {
-        return None;
-    }
-    let mut settled = None;
-    let mut last = Vec3::ZERO;
-    for _ in 0..REFINEMENTS {
-        let Some(blend) = blend_at(body, parts, w, l, y, x) else {
-            break;
-        };
-        let Some(inv) = inverse(blend.a) else { break };
-        let mut step = inv * (x - blend.b) - y;
-        // A step that turns back on the last one is overshooting an oscillation (near a
-        // joint the weights change fast along the step): half of it lands near the middle.
-        if step.dot(last) < 0.0 {
-            step *= 0.5;
-        }
-        y += step;
-        last = step;
-        settled = Some(y);
-        if step.length() < SETTLED_STEP {
-            break;
-        }
-    }
-    settled
+/// One body's words read for one query: the parts' poses and where each block lies.
+struct Query<'a> {
+    body: &'a BodyParams,
+    parts: &'a [BodyPose],
+    words: Words<'a>,
+    layout: Layout,
 }
 
-/// Part `k`'s answer at x, `None` where it has none (no settled rest point, or one that does
-/// not skin back to within the thickness of x).
-fn candidate(
-    body: &BodyParams,
-    parts: &[BodyPose],
-    w: &Words,
-    l: &Layout,
-    k: usize,
-    x: Vec3,
-) -> Option<Candidate> {
-    let y = rest_point(body, parts, w, l, k, x)?;
-    let blend = blend_at(body, parts, w, l, y, x)?;
-    // Where the rest point skins to now; a candidate that has not settled within the
-    // thickness does not describe the surface near x.
-    if (blend.a * y + blend.b - x).length() > body.thickness {
-        return None;
+impl Query<'_> {
+    /// The skin weights at rest point `y` (those at the closest point of the triangle nearest to
+    /// y's grid node), blended over the parts' poses; `None` outside the grid.
+    fn blend_at(&self, y: Vec3, x: Vec3) -> Option<Blend> {
+        let (body, w, l) = (self.body, &self.words, &self.layout);
+        let d = body.sdf_dims;
+        let g = (y - v3(body.sdf_origin)) / body.sdf_origin[3];
+        let last = Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) - Vec3::ONE;
+        if g.cmplt(Vec3::ZERO).any() || g.cmpgt(last).any() {
+            return None;
+        }
+        let c = (g + Vec3::splat(0.5)).floor().min(last).as_uvec3();
+        let node = c.x + d[0] * (c.y + d[1] * c.z);
+        let t = w.u(l.nodes + node);
+        let corner = |k: u32| w.u(l.triangles + 3 * t + k);
+        let (ia, ib, ic) = (corner(0), corner(1), corner(2));
+        let (a, b, cc) = (
+            w.vec3(l.vertices + 3 * ia),
+            w.vec3(l.vertices + 3 * ib),
+            w.vec3(l.vertices + 3 * ic),
+        );
+        let bary = closest_barycentric(y, a, b, cc);
+        let mut out = Blend {
+            a: Mat3::ZERO,
+            b: Vec3::ZERO,
+            linear: Vec3::ZERO,
+            angular: Vec3::ZERO,
+        };
+        for (k, vertex) in [ia, ib, ic].into_iter().enumerate() {
+            let base = l.weights + WEIGHT_WORDS as u32 * vertex;
+            let packed = w.u(base);
+            for slot in 0..4u32 {
+                let weight = bary[k] * w.f(base + 1 + slot);
+                if weight == 0.0 {
+                    continue;
+                }
+                let pose = &self.parts[((packed >> (8 * slot)) & 0xff) as usize];
+                out.a += Mat3::from_cols(v3(pose.x), v3(pose.y), v3(pose.z)) * weight;
+                out.b += v3(pose.translation) * weight;
+                let offset = x - v3(pose.translation);
+                out.linear += body_velocity_at(pose, offset) * weight;
+                out.angular += v3(pose.angular_velocity) * weight;
+            }
+        }
+        Some(out)
     }
-    let dims = [body.sdf_dims[0], body.sdf_dims[1], body.sdf_dims[2]];
-    let s: Vec4 = sdf_sample(w.0, dims, v3(body.sdf_origin), body.sdf_origin[3], y);
-    let n = inverse(blend.a)?.transpose() * s.truncate();
-    let len = n.length();
-    if len <= 1e-12 {
-        return None;
+
+    /// The rest point that part `k` maps x back to (its pose's inverse, then the skinning fixed
+    /// point), `None` where x is outside the part's box or the refinement cannot start.
+    fn rest_point(&self, k: usize, x: Vec3) -> Option<Vec3> {
+        let (w, l) = (&self.words, &self.layout);
+        let (mut y, _) = to_body_frame(&self.parts[k], x);
+        let lo = w.vec3(l.boxes + 6 * k as u32);
+        let hi = w.vec3(l.boxes + 6 * k as u32 + 3);
+        if y.cmplt(lo).any() || y.cmpgt(hi).any() {
+            return None;
+        }
+        let mut settled = None;
+        let mut last = Vec3::ZERO;
+        for _ in 0..REFINEMENTS {
+            let Some(blend) = self.blend_at(y, x) else {
+                break;
+            };
+            let Some(inv) = inverse(blend.a) else { break };
+            let mut step = inv * (x - blend.b) - y;
+            // A step that turns back on the last one is overshooting an oscillation (near a
+            // joint the weights change fast along the step): half of it lands near the middle.
+            if step.dot(last) < 0.0 {
+                step *= 0.5;
+            }
+            y += step;
+            last = step;
+            settled = Some(y);
+            if step.length() < SETTLED_STEP {
+                break;
+            }
+        }
+        settled
     }
-    // Outside: the rest surface point nearest y (y − φ∇φ̂), skinned.
-    let mut surface_distance = SDF_FAR;
-    if s.w >= 0.0 {
+
+    /// Part `k`'s answer at x, `None` where it has none (no settled rest point, or one that does
+    /// not skin back to within the thickness of x).
+    fn candidate(&self, k: usize, x: Vec3) -> Option<Candidate> {
+        let body = self.body;
+        let y = self.rest_point(k, x)?;
+        let blend = self.blend_at(y, x)?;
+        // Where the rest point skins to now; a candidate that has not settled within the
+        // thickness does not describe the surface near x.
+        if (blend.a * y + blend.b - x).length() > body.thickness {
+            return None;
+        }
+        let dims = [body.sdf_dims[0], body.sdf_dims[1], body.sdf_dims[2]];
+        let s: Vec4 = sdf_sample(
+            self.words.0,
+            dims,
+            v3(body.sdf_origin),
+            body.sdf_origin[3],
+            y,
+        );
+        let n = inverse(blend.a)?.transpose() * s.truncate();
+        let len = n.length();
+        if len <= 1e-12 {
+            return None;
+        }
+        let surface_distance = if s.w >= 0.0 {
+            self.skinned_surface_distance(y, s, x)
+        } else {
+            SDF_FAR
+        };
+        let sample = DeformedSample {
+            phi: s.w,
+            normal: n / len,
+            center: x,
+            linear: blend.linear,
+            angular: blend.angular,
+        };
+        Some(Candidate {
+            sample,
+            surface_distance,
+        })
+    }
+
+    /// How far x is from where the rest surface point nearest y (y − φ∇φ̂, from the SDF's
+    /// sample `s` at y) skins to (`SDF_FAR` where it cannot be skinned).
+    fn skinned_surface_distance(&self, y: Vec3, s: Vec4, x: Vec3) -> f32 {
         let g = s.truncate().length();
         let to_surface = if g > 0.0 {
             s.truncate() / g
@@ -297,21 +312,11 @@ fn candidate(
             Vec3::ZERO
         };
         let on_rest = y - s.w * to_surface;
-        if let Some(b) = blend_at(body, parts, w, l, on_rest, x) {
-            surface_distance = (b.a * on_rest + b.b - x).length();
+        match self.blend_at(on_rest, x) {
+            Some(b) => (b.a * on_rest + b.b - x).length(),
+            None => SDF_FAR,
         }
     }
-    let sample = DeformedSample {
-        phi: s.w,
-        normal: n / len,
-        center: x,
-        linear: blend.linear,
-        angular: blend.angular,
-    };
-    Some(Candidate {
-        sample,
-        surface_distance,
-    })
 }
 
 /// The body's contact at world point `x`. `parts` are the body's own parts' poses (its slice of
@@ -334,13 +339,18 @@ pub fn deformed_sample(
     words: &[f32],
     x: Vec3,
 ) -> DeformedSample {
-    let w = Words(words);
-    let l = layout(body, &w);
+    let words = Words(words);
+    let query = Query {
+        body,
+        parts,
+        layout: layout(body, &words),
+        words,
+    };
     let (mut deepest, mut shallowest) = (None, None);
     let mut outside = DeformedSample::FAR;
     let mut nearest_skinned_surface = SDF_FAR;
     for k in 0..(body.parts as usize).min(parts.len()) {
-        let Some(c) = candidate(body, parts, &w, &l, k, x) else {
+        let Some(c) = query.candidate(k, x) else {
             continue;
         };
         let phi = c.sample.phi;
