@@ -26,7 +26,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Simulate a scene and write OBJ frames and summary.json.
+    /// Simulate a scene and write OBJ frames, frames.csv and summary.json.
     #[command(after_help = "Examples:\n  \
         drapekit run fixtures/scenes/tshirt_drape_cotton.toml\n  \
         drapekit run fixtures/scenes/drape_sphere.toml --backend cpu --frames 12 --out out/sphere --quiet")]

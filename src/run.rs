@@ -146,9 +146,6 @@ pub fn adapter_named(adapter: &AdapterChoice) -> bool {
         || std::env::var("WGPU_ADAPTER_NAME").is_ok_and(|name| !name.is_empty())
 }
 
-/// Each simulated frame's settle figures (`RunStats::frames_csv`), in the run's folder.
-pub const FRAMES_CSV: &str = "frames.csv";
-
 /// Runs a scene and writes its frames and `summary.json`. Bad input fails before anything is
 /// written. A run that goes non-finite still writes its summary (with `finite: false` and the
 /// error) before returning the error.
@@ -451,8 +448,23 @@ fn run_scene_from(
         warnings.extend(previews.warnings);
         outputs.extend(previews.names);
     }
-    write_atomic(&out_dir.join(FRAMES_CSV), stats.frames_csv().as_bytes())?;
-    outputs.push(FRAMES_CSV.to_string());
+    // Like the summary, written whatever stopped the run, and its failure (a full disk) comes
+    // after the run's own error.
+    let frames_csv = write_atomic(
+        &out_dir.join(crate::run_folder::FRAMES_CSV),
+        stats.frames_csv().as_bytes(),
+    );
+    let result = match (result, frames_csv) {
+        (result, Ok(())) => {
+            outputs.push(crate::run_folder::FRAMES_CSV.to_string());
+            result
+        }
+        (Ok(()), Err(e)) => Err(e),
+        (Err(e), Err(w)) => {
+            eprintln!("drapekit: also: {w}");
+            Err(e)
+        }
+    };
     outputs.push("summary.json".to_string());
     let substeps_run = stats.frames_run as f64 * prep.substeps as f64;
     let first_body = prep.model.colliders.first();
@@ -533,7 +545,7 @@ fn run_scene_from(
         seams_closed: (stats.seam_gaps.iter())
             .filter(|&&g| g < prep.seam_closed_gap)
             .count(),
-        max_seam_gap_m: stats.seam_gaps.iter().copied().reduce(f32::max),
+        max_seam_gap_m: stats.widest_seam_gap(),
         seam_gaps_m: stats.seam_gaps.clone(),
         seams_closed_frame: stats.seams_closed_frame,
         bodies: prep.model.colliders.len(),

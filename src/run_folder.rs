@@ -11,6 +11,9 @@ use std::path::{Path, PathBuf};
 /// The scene's text as the run read it, in the run folder.
 pub const SCENE_COPY: &str = "scene.toml";
 
+/// Each simulated frame's settle figures (`RunStats::frames_csv`).
+pub const FRAMES_CSV: &str = "frames.csv";
+
 /// The files a run read, by absolute path.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Inputs {
@@ -70,7 +73,7 @@ pub fn is_run_file(name: &str) -> bool {
     matches!(
         name,
         "summary.json"
-            | "frames.csv"
+            | FRAMES_CSV
             | SCENE_COPY
             | "checkpoint.bin"
             | "cloth.pc2"

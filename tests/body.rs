@@ -529,7 +529,7 @@ fn bvh_strategies_agree_with_exact_on_a_recorded_state() {
 #[test]
 fn rotating_skirt_stays_on_and_out_of_the_mannequin() {
     // The thesis comparison case, full length (5.5 s: sewing, settling, turn right and left),
-    // on the CPU path (about 20 s on 2 cores; lavapipe took six times as long). The GPU path
+    // on the CPU path (about 15 s on 2 cores; lavapipe took six times as long). The GPU path
     // runs the same skirt on the same turning body at 720°/s in tests/stability.rs, and its
     // passes follow the CPU's trajectory (tests/parity.rs).
     let scene = Scene::load(&fixture("scenes/skirt_rotating.toml")).unwrap();

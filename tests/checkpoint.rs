@@ -35,6 +35,9 @@ fn assert_same_run(a: &Path, b: &Path, last: u32) {
         }
     }
     assert!(compared > 0, "no frames to compare up to {last}");
+    // Each frame's row once, the checkpoint's frames carried: the same file as the run's.
+    let frames = |dir: &Path| std::fs::read_to_string(dir.join("frames.csv")).unwrap();
+    assert_eq!(frames(a), frames(b), "frames.csv differs between the runs");
     let (sa, sb) = (summary(a), summary(b));
     for (key, value) in sa.as_object().unwrap() {
         if ["wall_seconds", "particle_substeps_per_second", "outputs"].contains(&key.as_str()) {

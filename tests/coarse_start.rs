@@ -8,6 +8,7 @@ use common::fixture;
 use drapekit::pattern::garment::{Garment, GarmentOptions};
 use drapekit::pattern::transfer::Transfer;
 use drapekit::pattern::Pattern;
+use drapekit::scene::Scene;
 use glam::Vec4;
 use std::path::{Path, PathBuf};
 
@@ -144,14 +145,20 @@ fn run_coarse_started_shirt(backend: &[&str], tag: &str) -> serde_json::Value {
     // The full mesh's rate counts its own frames and time only.
     assert!(f(&summary["wall_seconds"]) > f(&coarse["wall_seconds"]));
     assert!(f(&summary["particle_substeps_per_second"]) > 0.0);
-    check_frames_csv(&out, &summary);
+    let prep = drapekit::sim::prepare(&Scene::load(&scene).unwrap()).unwrap();
+    let rule = (
+        prep.settle_speed.unwrap(),
+        prep.settle_force_residual.unwrap(),
+    );
+    check_frames_csv(&out, &summary, rule);
     summary
 }
 
 /// `frames.csv` of a coarse-started run: a row for every frame, the coarse start's then the
 /// full mesh's, that agrees with the summary to the last digit, and whose rows before the
-/// settled frame each fail the settle rule (else it would have fired there).
-fn check_frames_csv(out: &Path, summary: &serde_json::Value) {
+/// settled frame each fail the settle rule, (speed, force residual) (else it would have fired
+/// there).
+fn check_frames_csv(out: &Path, summary: &serde_json::Value, rule: (f32, f32)) {
     let outputs = summary["outputs"].as_array().unwrap();
     assert!(outputs.iter().any(|o| o == "frames.csv"), "{summary:#}");
     let text = std::fs::read_to_string(out.join("frames.csv")).unwrap();
@@ -198,13 +205,14 @@ fn check_frames_csv(out: &Path, summary: &serde_json::Value) {
         full_mesh_largest as f32,
         number(&summary["max_edge_strain"]) as f32
     );
-    // The shipped 2 cm shirt's rule: 5 mm/s, and 5% of the weight.
+    // Compared as `sim::settle` compares them.
+    assert!(
+        settled > start + 1,
+        "the full mesh ran one frame: no row to check"
+    );
     for row in &rows[start..settled - 1] {
-        assert!(
-            row[2] >= 0.005 || row[4] > 0.05,
-            "frame {} meets the rule",
-            row[0]
-        );
+        let meets = row[2] < rule.0 as f64 && (row[4] as f32) <= rule.1;
+        assert!(!meets, "frame {} meets the rule {rule:?}", row[0]);
     }
 }
 

@@ -128,7 +128,8 @@ fn a_rerun_replaces_its_own_frames_and_another_scene_needs_overwrite() {
     // list (the summary's) agrees.
     let r = run(&hanging, "2", &[]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    assert!(String::from_utf8_lossy(&r.stderr).contains("replaced the 7 files"));
+    // Frames 0..=4, the scene's copy, frames.csv and the summary.
+    assert!(String::from_utf8_lossy(&r.stderr).contains("replaced the 8 files"));
     assert_eq!(
         frames_in(&out),
         ["frame_0000.obj", "frame_0001.obj", "frame_0002.obj"]

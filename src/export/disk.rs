@@ -92,6 +92,9 @@ pub fn estimate(scene: &Scene, prep: &Prepared, from: u32) -> OutputEstimate {
         once += cloth;
     }
     once += 2 * (32 * n + written * 12 * n * (out.pc2 || out.gltf) as u64);
+    // frames.csv has a row of about 100 bytes a simulated frame, and a checkpoint each row's
+    // record (about 170 bytes), briefly twice.
+    once += frames_left * (100 + 2 * 170);
     let p = &scene.preview;
     let png = PNG_BYTES_PER_PIXEL * p.size.0 as u64 * p.size.1 as u64;
     once += p.last.len() as u64 * png;

@@ -598,7 +598,8 @@ pub fn simulate_from(
         stats.energy = Some((energy, active));
         let state = solver.state()?;
         stats.wall_seconds += start.elapsed().as_secs_f64();
-        stats.frame_speed_m_s = Some(frame_speed(prep, &previous, &state.positions));
+        let speed = frame_speed(prep, &previous, &state.positions);
+        stats.frame_speed_m_s = Some(speed);
         previous.clone_from(&state.positions);
         if let Some(p) = solver.residual()? {
             let r = p.relative_residual;
@@ -608,7 +609,6 @@ pub fn simulate_from(
             stats.force_residual = Some(p.force_residual);
         }
         stats.max_speed = stats.max_speed.max(health.max_speed);
-        stats.frames_run = frame;
         stats.max_edge_strain = stats.max_edge_strain.max(strain);
         stats.last_edge_strain = strain;
         stats.last_edge_strain_p99 =
@@ -650,13 +650,16 @@ pub fn simulate_from(
         if !stats.seam_gaps.is_empty() && all_closed && stats.seams_closed_frame.is_none() {
             stats.seams_closed_frame = Some(frame);
         }
+        // The frame counts as run once every figure of it is in (the summary's `frames` and
+        // frames.csv's rows agree).
+        stats.frames_run = frame;
         stats.frames.push(FrameRecord {
             frame,
             particles: prep.model.len(),
-            rms_speed_m_s: stats.frame_speed_m_s.unwrap_or(0.0),
+            rms_speed_m_s: speed,
             force_residual: stats.force_residual,
             max_edge_strain: strain,
-            max_seam_gap_m: stats.seam_gaps.iter().fold(0.0, |a, &g| a.max(g)),
+            max_seam_gap_m: stats.widest_seam_gap().unwrap_or(0.0),
             body_contacts: stats.body_contacts,
         });
         on_frame(frame, &state, stats)?;

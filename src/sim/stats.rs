@@ -2,6 +2,7 @@
 
 use super::{CoarseStart, Settled};
 use serde::{Deserialize, Serialize};
+use std::fmt::Write;
 
 /// What a run measured, filled in frame by frame (so it is complete up to a failure). A
 /// checkpoint stores it, so a resumed run reports what the uninterrupted one would.
@@ -95,6 +96,11 @@ pub struct FrameRecord {
 }
 
 impl RunStats {
+    /// The widest seam gap at the last good frame, in m (`None` without seams).
+    pub fn widest_seam_gap(&self) -> Option<f32> {
+        self.seam_gaps.iter().copied().reduce(f32::max)
+    }
+
     /// `frames` as CSV, a header first; a figure the run does not have is left empty.
     pub fn frames_csv(&self) -> String {
         let mut csv = String::from(
@@ -106,8 +112,10 @@ impl RunStats {
                 Some((largest, rms)) => (largest.to_string(), rms.to_string()),
                 None => (String::new(), String::new()),
             };
-            csv += &format!(
-                "{},{},{},{largest},{rms},{},{},{}\n",
+            // Writing to a String cannot fail.
+            let _ = writeln!(
+                csv,
+                "{},{},{},{largest},{rms},{},{},{}",
                 r.frame,
                 r.particles,
                 r.rms_speed_m_s,
