@@ -448,23 +448,7 @@ fn run_scene_from(
         warnings.extend(previews.warnings);
         outputs.extend(previews.names);
     }
-    // Like the summary, written whatever stopped the run, and its failure (a full disk) comes
-    // after the run's own error.
-    let frames_csv = write_atomic(
-        &out_dir.join(crate::run_folder::FRAMES_CSV),
-        stats.frames_csv().as_bytes(),
-    );
-    let result = match (result, frames_csv) {
-        (result, Ok(())) => {
-            outputs.push(crate::run_folder::FRAMES_CSV.to_string());
-            result
-        }
-        (Ok(()), Err(e)) => Err(e),
-        (Err(e), Err(w)) => {
-            eprintln!("drapekit: also: {w}");
-            Err(e)
-        }
-    };
+    outputs.push(crate::run_folder::FRAMES_CSV.to_string());
     outputs.push("summary.json".to_string());
     let substeps_run = stats.frames_run as f64 * prep.substeps as f64;
     let first_body = prep.model.colliders.first();
@@ -584,17 +568,26 @@ fn run_scene_from(
         error: result.as_ref().err().map(|e| e.to_string()),
         outputs,
     };
-    finish_summary(summary, result, &out_dir)
+    finish_summary(summary, result, &out_dir, &stats.frames_csv())
 }
 
-/// Writes `summary.json` and returns the run's result: its own error first (a frame that could
-/// not be written is the cause, a summary that then could not be written the consequence),
-/// and a summary number that is not finite (JSON would show it as `null`) as an unstable run.
+/// Writes `frames.csv` (`frames`) and `summary.json` and returns the run's result: its own
+/// error first (a frame that could not be written is the cause, a file that then could not be
+/// written the consequence), and a summary number that is not finite (JSON would show it as
+/// `null`) as an unstable run. A `frames.csv` that could not be written leaves the summary's
+/// outputs.
 fn finish_summary(
     mut summary: Summary,
     result: Result<(), Error>,
     out_dir: &std::path::Path,
+    frames: &str,
 ) -> Result<Summary, Error> {
+    let csv = crate::run_folder::FRAMES_CSV;
+    let frames_written = write_atomic(&out_dir.join(csv), frames.as_bytes());
+    if frames_written.is_err() {
+        summary.outputs.retain(|o| o != csv);
+    }
+    let result = cause_first(result, frames_written);
     let non_finite = summary.non_finite_fields();
     let result = result.and_then(|()| match non_finite.is_empty() {
         true => Ok(()),
@@ -609,13 +602,18 @@ fn finish_summary(
     }
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
     let written = write_atomic(&out_dir.join("summary.json"), json.as_bytes());
-    match (result, written) {
+    cause_first(result, written).map(|()| summary)
+}
+
+/// `result`'s error if it has one (the later failure only said on stderr), else `later`'s.
+fn cause_first(result: Result<(), Error>, later: Result<(), Error>) -> Result<(), Error> {
+    match (result, later) {
         (Err(e), Err(w)) => {
             eprintln!("drapekit: also: {w}");
             Err(e)
         }
         (Err(e), Ok(())) | (Ok(()), Err(e)) => Err(e),
-        (Ok(()), Ok(())) => Ok(summary),
+        (Ok(()), Ok(())) => Ok(()),
     }
 }
 

@@ -13,9 +13,9 @@
 //! smallest φ wins (the point is inside if any part says so and no other part refutes that
 //! depth: `deformed_sample`).
 
-use super::collide_body::{body_velocity_at, to_body_frame};
+use super::collide_body::{body_velocity_at, sample_body_sdf, to_body_frame};
 use crate::body::deformed_sdf::WEIGHT_WORDS;
-use crate::body::sdf::{sdf_sample, SDF_FAR};
+use crate::body::sdf::SDF_FAR;
 use crate::model::layout::{BodyParams, BodyPose};
 use glam::{Mat3, Vec3, Vec4};
 
@@ -271,14 +271,7 @@ impl Query<'_> {
         if (blend.a * y + blend.b - x).length() > body.thickness {
             return None;
         }
-        let dims = [body.sdf_dims[0], body.sdf_dims[1], body.sdf_dims[2]];
-        let s: Vec4 = sdf_sample(
-            self.words.0,
-            dims,
-            v3(body.sdf_origin),
-            body.sdf_origin[3],
-            y,
-        );
+        let s = sample_body_sdf(body, self.words.0, y);
         let n = inverse(blend.a)?.transpose() * s.truncate();
         let len = n.length();
         if len <= 1e-12 {

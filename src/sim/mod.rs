@@ -653,15 +653,7 @@ pub fn simulate_from(
         // The frame counts as run once every figure of it is in (the summary's `frames` and
         // frames.csv's rows agree).
         stats.frames_run = frame;
-        stats.frames.push(FrameRecord {
-            frame,
-            particles: prep.model.len(),
-            rms_speed_m_s: speed,
-            force_residual: stats.force_residual,
-            max_edge_strain: strain,
-            max_seam_gap_m: stats.widest_seam_gap().unwrap_or(0.0),
-            body_contacts: stats.body_contacts,
-        });
+        stats.record_frame(frame, prep.model.len(), speed, strain);
         on_frame(frame, &state, stats)?;
         let next = phase_params(prep, frame, stats);
         if next != params {

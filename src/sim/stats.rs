@@ -101,6 +101,20 @@ impl RunStats {
         self.seam_gaps.iter().copied().reduce(f32::max)
     }
 
+    /// Records frame `frame` of a mesh of `particles`, with the frame's RMS speed and largest
+    /// strain and the figures this frame has set (`frames.csv`'s row).
+    pub fn record_frame(&mut self, frame: u32, particles: usize, speed: f64, strain: f32) {
+        self.frames.push(FrameRecord {
+            frame,
+            particles,
+            rms_speed_m_s: speed,
+            force_residual: self.force_residual,
+            max_edge_strain: strain,
+            max_seam_gap_m: self.widest_seam_gap().unwrap_or(0.0),
+            body_contacts: self.body_contacts,
+        });
+    }
+
     /// `frames` as CSV, a header first; a figure the run does not have is left empty.
     pub fn frames_csv(&self) -> String {
         let mut csv = String::from(
