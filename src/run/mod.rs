@@ -1,22 +1,23 @@
 //! `drapekit run`: scene → prepared run → backend → frames and summary on disk.
 
-use crate::atomic_file::write_atomic;
+mod coarse_start;
+mod summary;
+
 use crate::checkpoint::{Checkpoint, CheckpointHeader};
 use crate::cpu::CpuSolver;
 use crate::error::Error;
 use crate::export::Exporter;
 use crate::gpu::{AdapterChoice, GpuContext, GpuSolver};
-use crate::model::layout::{INTEGRATOR_EXPLICIT, INTEGRATOR_IMPLICIT};
 use crate::output::Summary;
 use crate::preview::RunPreviews;
 use crate::scene::Scene;
-use crate::sim::{
-    map_state, prepare, simulate, simulate_from, CoarseStart, Prepared, ResumeFrom, RunStats,
-};
+use crate::sim::{prepare, simulate_from, Prepared, ResumeFrom, RunStats};
 use crate::solver::Solver;
+use coarse_start::coarse_start;
 use std::path::PathBuf;
 use std::str::FromStr;
 use std::sync::atomic::{AtomicBool, Ordering};
+use summary::Backend;
 
 /// Set by the CLI's Ctrl-C handler: the run stops after the current frame, writes a checkpoint
 /// and returns `Error::Interrupted`.
@@ -236,48 +237,14 @@ fn run_scene_from(
         None => crate::run_folder::check(&out_dir, &scene, opts.overwrite)?,
         Some(_) => Vec::new(),
     };
-    // Before the distance field is baked (a body in the wrong unit is named before its SDF's
-    // size is refused) and before the long part of the run.
-    let input_warnings = crate::health::scene_warnings(&scene)?;
-    for w in &input_warnings {
-        eprintln!("drapekit: warning: {w}");
-    }
-    // Values that compute but no real scene has: said before anything slow starts.
-    let load_warnings = crate::model::budget::load_warnings(&scene);
-    for w in &load_warnings {
-        eprintln!("drapekit: warning: {w}");
-    }
-    let (device, backend_note) = choose_device(opts.backend, &opts.adapter)?;
-    if let Some(ctx) = &device {
-        // Refused from the scene alone, before anything is built or baked.
-        crate::model::budget::check_gpu_textures(&scene, ctx.max_texels())?;
-        crate::model::budget::check_sdf_textures(&scene, ctx.max_texels())?;
-    }
-    let prep = prepare(&scene)?;
-    if let Some(ctx) = &device {
-        // The estimate cannot see an OBJ cloth's size; the built model can.
-        crate::model::budget::check_model_textures(&scene, &prep.model, ctx.max_texels())?;
-    }
-    // Refused before anything is simulated or written: the files must fit the disk.
     let from_frame = resume.as_ref().map_or(0, |c| c.header.frame);
-    crate::export::disk::check_space(&scene, &prep, &out_dir, from_frame)?;
-    let mut solver = build_solver(&prep, device.as_ref())?;
-    if let Some(note) = &backend_note {
-        eprintln!("drapekit: {note}");
-    }
-    let mut warnings = prep.warnings.clone();
-    let wants_edges = (prep.model.colliders.iter()).any(|c| c.edges.is_some());
-    if wants_edges && solver.backend_name() == "gpu" {
-        warnings.push(
-            "edge_contacts is CPU only: the GPU backend tests particles against the SDF \
-             (use --backend cpu for cloth-edge against body-edge contacts)"
-                .into(),
-        );
-    }
-    for w in &warnings {
-        eprintln!("drapekit: warning: {w}");
-    }
-    warnings.splice(0..0, input_warnings.into_iter().chain(load_warnings));
+    let SetUp {
+        device,
+        backend_note,
+        prep,
+        mut solver,
+        mut warnings,
+    } = set_up(&scene, opts, &out_dir, from_frame)?;
     // Before the output folder exists: a coarse start that cannot settle is bad input. A
     // resumed run continues from its checkpoint, past any coarse start.
     let coarse = match (&scene.cloth, &resume) {
@@ -450,259 +417,89 @@ fn run_scene_from(
     }
     outputs.push(crate::run_folder::FRAMES_CSV.to_string());
     outputs.push("summary.json".to_string());
-    let substeps_run = stats.frames_run as f64 * prep.substeps as f64;
-    let first_body = prep.model.colliders.first();
-    let summary = Summary {
-        scene: scene_path.display().to_string(),
-        inputs: crate::run_folder::inputs(&scene),
-        backend: solver.backend_name().to_string(),
-        backend_note,
+    let backend = Backend {
+        name: solver.backend_name(),
         adapter: solver.adapter(),
-        cpu_threads: (solver.backend_name() == "cpu").then(rayon::current_num_threads),
-        particles: prep.model.len(),
-        triangles: prep.model.triangles.len(),
-        springs: prep.model.springs.len(),
-        hinges: prep.hinges_in_use(),
-        frames: stats.frames_run,
-        frames_requested: prep.frames,
-        fps: scene.solver.fps,
-        substeps_per_frame: prep.substeps,
-        substeps_source: if prep.auto_substeps { "auto" } else { "scene" },
-        stable_dt_estimate_s: prep.stable_dt,
-        dt_limited_by: prep.dt_limited_by,
-        dt: prep.params.dt,
-        integrator: match prep.params.integrator {
-            INTEGRATOR_EXPLICIT => "explicit",
-            INTEGRATOR_IMPLICIT => "implicit",
-            _ => "symplectic",
-        },
-        iterations: prep.colors.map(|_| prep.params.iterations),
-        tolerance: prep.colors.and(scene.solver.tolerance),
-        iterations_mean: prep.colors.map(|_| {
-            let frames = stats.frames_run - stats.coarse_start.as_ref().map_or(0, |c| c.frame);
-            stats.iterations_run as f64 / (frames as f64 * prep.substeps as f64).max(1.0)
-        }),
-        newton_steps_mean: prep.model.multigrid.as_ref().map(|_| {
-            let frames = stats.frames_run - stats.coarse_start.as_ref().map_or(0, |c| c.frame);
-            stats.newton_steps_run as f64 / (frames as f64 * prep.substeps as f64).max(1.0)
-        }),
-        multigrid_levels: prep.model.multigrid.as_ref().map(|m| m.sizes()),
-        colors: prep.colors,
-        max_residual: stats.max_residual,
-        force_residual_max: stats.force_residual.map(|r| r.0),
-        force_residual_rms: stats.force_residual.map(|r| r.1),
-        simulated_seconds: substeps_run * prep.params.dt as f64,
-        wall_seconds: stats.wall_seconds,
-        particle_substeps_per_second: {
-            // The full mesh's frames and time: the coarse start's are its own.
-            let (frames, wall) = match &stats.coarse_start {
-                Some(c) => (c.frame, c.wall_seconds),
-                None => (0, 0.0),
-            };
-            let substeps = stats.frames_run.saturating_sub(frames) as f64 * prep.substeps as f64;
-            let wall = stats.wall_seconds - wall;
-            if wall > 0.0 {
-                prep.model.len() as f64 * substeps / wall
-            } else {
-                0.0
-            }
-        },
-        coarse_start: stats.coarse_start.clone(),
-        // The stages the backend ran: each evaluates hinges its own way.
-        passes: prep
-            .plan
-            .for_backend(match solver.backend_name() {
-                "cpu" => CpuSolver::HINGES,
-                _ => GpuSolver::HINGES,
-            })
-            .names(),
-        max_edge_strain: stats.max_edge_strain,
-        last_frame_max_edge_strain: stats.last_edge_strain,
-        last_frame_edge_strain_p99: stats.last_edge_strain_p99,
-        last_frame_thread_strain: stats.last_thread_strain,
-        strain_limit: (prep.plan.contains(crate::plan::Pass::StrainLimit))
-            .then_some(prep.params.strain_limit),
-        strain_limit_clamped_edges: stats.strain_limit_clamped_edges,
-        max_speed_m_s: stats.max_speed,
-        kinetic_energy_j: stats.kinetic_energy_j,
-        seams: stats.seam_gaps.len(),
-        seams_closed: (stats.seam_gaps.iter())
-            .filter(|&&g| g < prep.seam_closed_gap)
-            .count(),
-        max_seam_gap_m: stats.widest_seam_gap(),
-        seam_gaps_m: stats.seam_gaps.clone(),
-        seams_closed_frame: stats.seams_closed_frame,
-        bodies: prep.model.colliders.len(),
-        collision_strategy: first_body.map(|first| {
-            let all = &prep.model.colliders;
-            if solver.backend_name() == "gpu" {
-                "sdf"
-            } else if all.iter().all(|c| c.strategy == first.strategy) {
-                first.strategy.name()
-            } else {
-                "mixed"
-            }
-        }),
-        edge_contacts: first_body.map(|_| {
-            let any = prep.model.colliders.iter().any(|c| c.edges.is_some());
-            any && solver.backend_name() == "cpu"
-        }),
-        max_penetration_m: first_body.map(|_| stats.max_penetration_m),
-        body_contacts: first_body.map(|_| stats.body_contacts),
-        body_show_through: show_through,
-        sdf: first_body.map(|c| c.bake.clone()),
-        body_sdfs: (prep.model.colliders.iter())
-            .map(|c| c.bake.clone())
-            .collect(),
-        body_surface_speed_m_s: first_body.map(|_| prep.body_surface_speed),
-        body_surface_step_m: first_body.map(|_| prep.body_surface_speed * prep.params.dt),
-        body_motion: (prep.model.colliders.iter())
-            .find_map(|c| c.deformed.as_ref())
-            .map(|d| d.deformation.report(stats.deformed_penetration_m.clone())),
-        attached_particles: prep.attached.len(),
-        released_after_frame: stats.released_after_frame,
-        finite: stats.finite,
-        settled: stats.settled.clone(),
-        last_frame_rms_speed_m_s: stats.frame_speed_m_s,
-        warnings,
-        error: result.as_ref().err().map(|e| e.to_string()),
+        note: backend_note,
+    };
+    let error = result.as_ref().err().map(|e| e.to_string());
+    let summary = summary::summary(
+        &scene,
+        &prep,
+        &stats,
+        backend,
+        show_through,
+        (warnings, error),
         outputs,
-    };
-    finish_summary(summary, result, &out_dir, &stats.frames_csv())
-}
-
-/// Writes `frames.csv` (`frames`) and `summary.json` and returns the run's result: its own
-/// error first (a frame that could not be written is the cause, a file that then could not be
-/// written the consequence), and a summary number that is not finite (JSON would show it as
-/// `null`) as an unstable run. A `frames.csv` that could not be written leaves the summary's
-/// outputs.
-fn finish_summary(
-    mut summary: Summary,
-    result: Result<(), Error>,
-    out_dir: &std::path::Path,
-    frames: &str,
-) -> Result<Summary, Error> {
-    let csv = crate::run_folder::FRAMES_CSV;
-    let frames_written = write_atomic(&out_dir.join(csv), frames.as_bytes());
-    if frames_written.is_err() {
-        summary.outputs.retain(|o| o != csv);
-    }
-    let result = cause_first(result, frames_written);
-    let non_finite = summary.non_finite_fields();
-    let result = result.and_then(|()| match non_finite.is_empty() {
-        true => Ok(()),
-        false => Err(Error::Unstable(format!(
-            "the run produced non-finite values in the summary ({}), written there as null",
-            non_finite.join(", ")
-        ))),
-    });
-    if let Err(e) = &result {
-        summary.finite &= non_finite.is_empty();
-        summary.error.get_or_insert_with(|| e.to_string());
-    }
-    let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
-    let written = write_atomic(&out_dir.join("summary.json"), json.as_bytes());
-    cause_first(result, written).map(|()| summary)
-}
-
-/// `result`'s error if it has one (the later failure only said on stderr), else `later`'s.
-fn cause_first(result: Result<(), Error>, later: Result<(), Error>) -> Result<(), Error> {
-    match (result, later) {
-        (Err(e), Err(w)) => {
-            eprintln!("drapekit: also: {w}");
-            Err(e)
-        }
-        (Err(e), Ok(())) | (Ok(()), Err(e)) => Err(e),
-        (Ok(()), Ok(())) => Ok(()),
-    }
-}
-
-/// Sews and drapes `scene`'s garment at `distance` spacing until it settles (or its frames
-/// end) and maps the result onto `fine`'s mesh: where the full-resolution run continues from,
-/// and its stats so far (what the coarse start did, the seams' state, its time).
-fn coarse_start(
-    scene: &Scene,
-    distance: f64,
-    device: Option<&GpuContext>,
-    fine: &Prepared,
-) -> Result<(ResumeFrom, RunStats), Error> {
-    let started = std::time::Instant::now();
-    let mut coarse = scene.clone();
-    if let crate::scene::ClothSource::Pattern {
-        options,
-        coarse_start,
-        ..
-    } = &mut coarse.cloth
-    {
-        options.particle_distance = distance;
-        *coarse_start = None;
-    }
-    let prep = prepare(&coarse)?;
-    eprintln!(
-        "drapekit: coarse start: sewing and draping {} particles at {distance:.3} m until they \
-         settle (a second Ctrl-C stops it at once)",
-        prep.model.len()
     );
-    let mut solver = build_solver(&prep, device)?;
-    let mut stats = RunStats::default();
-    simulate(&prep, solver.as_mut(), &mut stats, |_, _| Ok(())).map_err(|e| match e {
-        Error::Unstable(m) => Error::Unstable(format!(
-            "the coarse start (coarse_start_distance_m = {distance:.3}): {m}"
-        )),
-        e => e,
-    })?;
-    let frame = stats.frames_run;
-    if stats.settled.is_none() || frame >= fine.frames {
-        return Err(scene
-            .error(
-                "cloth.pattern",
-                "coarse_start_distance_m",
-                format!(
-                    "the coarse start ({} particles at {distance:.3} m) {} within the run's {} \
-                     frames (its speed at frame {frame}: {:.2e} m/s, against settle_speed_m_s), \
-                     so no frame is left for the full mesh",
-                    prep.model.len(),
-                    if stats.settled.is_none() {
-                        "did not settle"
-                    } else {
-                        "settled only at the last frame"
-                    },
-                    fine.frames,
-                    stats.frame_speed_m_s.unwrap_or(f64::NAN),
-                ),
-                "raise solver.frames (or --frames), use a finer coarse_start_distance_m, or \
-                 remove it",
-            )
-            .into());
+    summary::finish_summary(summary, result, &out_dir, &stats.frames_csv())
+}
+
+/// What a run needs before its first frame, each input checked on the way.
+struct SetUp {
+    device: Option<GpuContext>,
+    backend_note: Option<String>,
+    prep: Prepared,
+    solver: Box<dyn Solver>,
+    /// Every warning so far (also said on stderr).
+    warnings: Vec<String>,
+}
+
+/// Checks `scene` and builds its run: the warnings on its inputs, the backend, the prepared
+/// model and the solver, refusing what the adapter's textures or the disk under `out_dir`
+/// (from frame `from_frame` on) cannot hold before anything slow starts.
+fn set_up(
+    scene: &Scene,
+    opts: &RunOptions,
+    out_dir: &std::path::Path,
+    from_frame: u32,
+) -> Result<SetUp, Error> {
+    // Before the distance field is baked (a body in the wrong unit is named before its SDF's
+    // size is refused) and before the long part of the run.
+    let input_warnings = crate::health::scene_warnings(scene)?;
+    for w in &input_warnings {
+        eprintln!("drapekit: warning: {w}");
     }
-    let (state, gap) = map_state(&prep, &solver.state()?, fine, frame).ok_or_else(|| {
-        scene.error(
-            "cloth.pattern",
-            "coarse_start_distance_m",
-            "a coarse start needs a sewing pattern",
-            "remove coarse_start_distance_m",
-        )
-    })?;
-    let wall_seconds = started.elapsed().as_secs_f64();
-    let record = CoarseStart {
-        particle_distance_m: distance as f32,
-        particles: prep.model.len(),
-        frame,
-        settled_frame: stats.settled.as_ref().map(|s| s.frame),
-        seams_closed_frame: stats.seams_closed_frame,
-        max_edge_strain: stats.max_edge_strain,
-        wall_seconds,
-        max_pattern_gap_m: gap,
-    };
-    let continued = RunStats {
-        frames: stats.frames,
-        frames_run: frame,
-        wall_seconds,
-        finite: true,
-        seams_closed_frame: stats.seams_closed_frame,
-        released_after_frame: stats.released_after_frame,
-        coarse_start: Some(record),
-        ..RunStats::default()
-    };
-    Ok((ResumeFrom { frame, state }, continued))
+    // Values that compute but no real scene has: said before anything slow starts.
+    let load_warnings = crate::model::budget::load_warnings(scene);
+    for w in &load_warnings {
+        eprintln!("drapekit: warning: {w}");
+    }
+    let (device, backend_note) = choose_device(opts.backend, &opts.adapter)?;
+    if let Some(ctx) = &device {
+        // Refused from the scene alone, before anything is built or baked.
+        crate::model::budget::check_gpu_textures(scene, ctx.max_texels())?;
+        crate::model::budget::check_sdf_textures(scene, ctx.max_texels())?;
+    }
+    let prep = prepare(scene)?;
+    if let Some(ctx) = &device {
+        // The estimate cannot see an OBJ cloth's size; the built model can.
+        crate::model::budget::check_model_textures(scene, &prep.model, ctx.max_texels())?;
+    }
+    // Refused before anything is simulated or written: the files must fit the disk.
+    crate::export::disk::check_space(scene, &prep, out_dir, from_frame)?;
+    let solver = build_solver(&prep, device.as_ref())?;
+    if let Some(note) = &backend_note {
+        eprintln!("drapekit: {note}");
+    }
+    let mut warnings = prep.warnings.clone();
+    let wants_edges = (prep.model.colliders.iter()).any(|c| c.edges.is_some());
+    if wants_edges && solver.backend_name() == "gpu" {
+        warnings.push(
+            "edge_contacts is CPU only: the GPU backend tests particles against the SDF \
+             (use --backend cpu for cloth-edge against body-edge contacts)"
+                .into(),
+        );
+    }
+    for w in &warnings {
+        eprintln!("drapekit: warning: {w}");
+    }
+    warnings.splice(0..0, input_warnings.into_iter().chain(load_warnings));
+    Ok(SetUp {
+        device,
+        backend_note,
+        prep,
+        solver,
+        warnings,
+    })
 }
