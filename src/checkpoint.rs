@@ -105,24 +105,35 @@ impl Checkpoint {
             .get(..8)
             .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")) as usize)
             .ok_or_else(|| bad("it ends inside its header length"))?;
-        let header_bytes = rest
-            .get(8..8 + len)
+        let header_bytes = (len.checked_add(8))
+            .and_then(|end| rest.get(8..end))
             .ok_or_else(|| bad("it ends inside its header"))?;
         let header: CheckpointHeader = serde_json::from_slice(header_bytes)
             .map_err(|e| bad(&format!("its header is not valid ({e})")))?;
         let data = &rest[8 + len..];
         let n = header.particles;
-        let expected = 4 * (8 * n + 3 * n * header.kept_frames.len());
-        if data.len() != expected {
+        // Each particle's position and velocity (8 floats) and 3 per kept frame, 4 bytes each;
+        // a count too large to compute is a damaged header, not a size.
+        let expected = (header.kept_frames.len().checked_mul(3))
+            .and_then(|k| k.checked_add(8))
+            .and_then(|floats| floats.checked_mul(n))
+            .and_then(|floats| floats.checked_mul(4));
+        if expected != Some(data.len()) {
             return Err(bad(&format!(
-                "it holds {} bytes of arrays where its header says {expected}",
-                data.len()
+                "it holds {} bytes of arrays where its header says {}",
+                data.len(),
+                expected.map_or("more than this machine can count".into(), |e| e.to_string())
             )));
         }
         let floats: Vec<f32> = data
             .chunks_exact(4)
             .map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes")))
             .collect();
+        if let Some(k) = floats.iter().position(|f| !f.is_finite()) {
+            return Err(bad(&format!(
+                "value {k} of its arrays is not a finite number (a run never checkpoints one)"
+            )));
+        }
         let vec4s = |from: usize| -> Vec<Vec4> {
             floats[from..from + 4 * n]
                 .chunks_exact(4)

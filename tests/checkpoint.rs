@@ -199,6 +199,68 @@ fn a_changed_scene_or_a_damaged_checkpoint_is_refused() {
     assert!(stderr.contains("checkpoint.bin"), "{stderr}");
     let r = drapekit(&["resume", dir.join("nowhere").to_str().unwrap()]);
     assert_eq!(r.status.code(), Some(2));
+    // The scene as it ran, so that only the checkpoint is at fault below.
+    std::fs::write(&scene, &text).unwrap();
+    let (header, arrays) = split_checkpoint(&bytes);
+    // A header whose particle count makes the arrays' size overflow (2⁶¹ particles × 32 bytes
+    // wraps to 0, which an empty array section would match).
+    let huge = serde_json::Value::from(1u64 << 61);
+    let damaged = [
+        (
+            with_header(&header, "particles", huge),
+            Vec::new(),
+            "bytes of arrays",
+        ),
+        // A position that is not a number: a run never checkpoints one.
+        (header.clone(), with_nan(&arrays), "not a finite number"),
+    ];
+    for (header, arrays, expected) in damaged {
+        std::fs::write(&ckpt, join_checkpoint(&header, &arrays)).unwrap();
+        let r = drapekit(&["resume", out.to_str().unwrap()]);
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains("checkpoint.bin"), "{stderr}");
+        assert!(stderr.contains(expected), "{stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+}
+
+/// A checkpoint file's magic line, then its header's length (8 bytes, little-endian), header
+/// (JSON) and arrays: the header and the arrays.
+fn split_checkpoint(bytes: &[u8]) -> (serde_json::Value, Vec<u8>) {
+    let magic = bytes.iter().position(|&b| b == b'\n').unwrap() + 1;
+    let len = u64::from_le_bytes(bytes[magic..magic + 8].try_into().unwrap()) as usize;
+    let header = &bytes[magic + 8..magic + 8 + len];
+    (
+        serde_json::from_slice(header).unwrap(),
+        bytes[magic + 8 + len..].to_vec(),
+    )
+}
+
+fn join_checkpoint(header: &serde_json::Value, arrays: &[u8]) -> Vec<u8> {
+    let json = serde_json::to_vec(header).unwrap();
+    let mut out = b"DRAPEKIT CHECKPOINT 1\n".to_vec();
+    out.extend_from_slice(&(json.len() as u64).to_le_bytes());
+    out.extend_from_slice(&json);
+    out.extend_from_slice(arrays);
+    out
+}
+
+fn with_header(
+    header: &serde_json::Value,
+    key: &str,
+    value: serde_json::Value,
+) -> serde_json::Value {
+    let mut header = header.clone();
+    header[key] = value;
+    header
+}
+
+/// The arrays with the first particle's x position NaN.
+fn with_nan(arrays: &[u8]) -> Vec<u8> {
+    let mut out = arrays.to_vec();
+    out[..4].copy_from_slice(&f32::NAN.to_le_bytes());
+    out
 }
 
 /// FNV-1a over bytes: a fixed, documented hash (std's hasher may change between releases).
