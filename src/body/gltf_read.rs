@@ -6,7 +6,9 @@ use super::skin::{Channel, Clip, Influence, Interpolation, Skeleton, SkinnedMesh
 use crate::error::InputError;
 use crate::mesh::TriMesh;
 use glam::{Mat4, Quat, Vec3};
+use gltf::accessor::{DataType, Dimensions};
 use gltf::animation::util::ReadOutputs;
+use gltf::animation::Property;
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -47,6 +49,16 @@ pub fn parse_skinned(
              vertex cache (cache = \"walk.pc2\" beside an OBJ body)",
         ));
     };
+    no_cycle(doc, &bad)?;
+    if let Some(acc) = skin.inverse_bind_matrices() {
+        readable(
+            &acc,
+            &[DataType::F32],
+            Dimensions::Mat4,
+            "inverse bind matrices",
+            &bad,
+        )?;
+    }
     let get = |b: gltf::Buffer| buffers.get(b.index()).map(|v| &v[..]);
     let joints: Vec<gltf::Node> = skin.joints().collect();
     let order = parents_first(doc, &joints);
@@ -127,6 +139,91 @@ fn load_buffers(
         out.push(data);
     }
     Ok(out)
+}
+
+/// Whether `acc` can be read as `what` (its data types `types`, its shape `dims`): the gltf
+/// crate's readers assume a valid file and panic on a component type or a stride they do not
+/// expect, so every accessor is checked before it is read. Sparse accessors are not read.
+fn readable(
+    acc: &gltf::Accessor,
+    types: &[DataType],
+    dims: Dimensions,
+    what: &str,
+    bad: &impl Fn(String, &str) -> InputError,
+) -> Result<(), InputError> {
+    let fix = "export the avatar again as glTF 2.0 (the file does not follow the format)";
+    if !types.contains(&acc.data_type()) || acc.dimensions() != dims {
+        return Err(bad(
+            format!(
+                "accessor {} ({what}) holds {:?} {:?}, where glTF allows {dims:?} of {types:?}",
+                acc.index(),
+                acc.dimensions(),
+                acc.data_type()
+            ),
+            fix,
+        ));
+    }
+    if acc.sparse().is_some() {
+        return Err(bad(
+            format!(
+                "accessor {} ({what}) is sparse, which drapekit does not read",
+                acc.index()
+            ),
+            "export the avatar without sparse accessors",
+        ));
+    }
+    let Some(view) = acc.view() else {
+        return Ok(());
+    };
+    let size = acc.size();
+    let stride = view.stride().unwrap_or(size);
+    // The last element's end, past the accessor's start in its view.
+    let end = (acc.count().checked_sub(1))
+        .and_then(|k| k.checked_mul(stride))
+        .and_then(|b| b.checked_add(size))
+        .and_then(|b| b.checked_add(acc.offset()));
+    match end {
+        Some(end) if stride >= size && end <= view.length() => Ok(()),
+        _ => Err(bad(
+            format!(
+                "accessor {} ({what}) has {} elements of {size} bytes every {stride} bytes from \
+                 byte {}, which do not fit its {}-byte buffer view",
+                acc.index(),
+                acc.count(),
+                acc.offset(),
+                view.length()
+            ),
+            fix,
+        )),
+    }
+}
+
+/// Refuses a node hierarchy in which a node is its own ancestor (the gltf crate does not check,
+/// and walking up such a tree never ends).
+fn no_cycle(
+    doc: &gltf::Document,
+    bad: &impl Fn(String, &str) -> InputError,
+) -> Result<(), InputError> {
+    let parent = parents(doc);
+    for n in doc.nodes() {
+        let mut node = n.index();
+        for _ in 0..=doc.nodes().len() {
+            match parent.get(&node) {
+                Some(&p) if p == n.index() => {
+                    return Err(bad(
+                        format!(
+                            "node {} is its own ancestor (its children lead back to it)",
+                            n.index()
+                        ),
+                        "export the avatar again: glTF nodes form a tree",
+                    ))
+                }
+                Some(&p) => node = p,
+                None => break,
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Each node's parent.
@@ -246,6 +343,33 @@ fn skinned_primitives<'s>(
         for prim in m.primitives() {
             if prim.mode() != gltf::mesh::Mode::Triangles {
                 continue;
+            }
+            let attributes = [
+                (
+                    gltf::Semantic::Positions,
+                    &[DataType::F32][..],
+                    Dimensions::Vec3,
+                ),
+                (
+                    gltf::Semantic::Joints(0),
+                    &[DataType::U8, DataType::U16],
+                    Dimensions::Vec4,
+                ),
+                (
+                    gltf::Semantic::Weights(0),
+                    &[DataType::F32, DataType::U8, DataType::U16],
+                    Dimensions::Vec4,
+                ),
+            ];
+            for (semantic, types, dims) in attributes {
+                if let Some(acc) = prim.get(&semantic) {
+                    let what = format!("mesh '{mesh_name}' {semantic:?}");
+                    readable(&acc, types, dims, &what, bad)?;
+                }
+            }
+            if let Some(acc) = prim.indices() {
+                let (types, what) = ([DataType::U8, DataType::U16, DataType::U32], "indices");
+                readable(&acc, &types, Dimensions::Scalar, what, bad)?;
             }
             let r = prim.reader(get.clone());
             let missing = |what: &str| {
@@ -374,6 +498,30 @@ fn clips<'s>(
             let Some(&joint) = joint_of.get(&c.target().node().index()) else {
                 continue;
             };
+            let what = format!("animation '{name}' channel {}", c.index());
+            let sampler = c.sampler();
+            readable(
+                &sampler.input(),
+                &[DataType::F32],
+                Dimensions::Scalar,
+                &what,
+                bad,
+            )?;
+            let output = match c.target().property() {
+                Property::Translation | Property::Scale => (&[DataType::F32][..], Dimensions::Vec3),
+                Property::Rotation => (
+                    &[
+                        DataType::F32,
+                        DataType::I8,
+                        DataType::U8,
+                        DataType::I16,
+                        DataType::U16,
+                    ][..],
+                    Dimensions::Vec4,
+                ),
+                Property::MorphTargetWeights => continue,
+            };
+            readable(&sampler.output(), output.0, output.1, &what, bad)?;
             let r = c.reader(get.clone());
             let (Some(times), Some(outputs)) = (r.read_inputs(), r.read_outputs()) else {
                 continue;
