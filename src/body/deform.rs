@@ -70,6 +70,24 @@ pub struct Deformation {
     pub part_joints: Vec<usize>,
 }
 
+/// The longest timeline (transition and every play) a deforming body may have, in s: collision
+/// keys each part's motion `PART_KEY_RATE` times a second over all of it, and no garment run
+/// simulates an hour.
+pub const MAX_MOTION_S: f32 = 3600.0;
+
+impl Timeline {
+    /// Whether the transition and `plays` plays of a motion `length` s long fit in
+    /// `MAX_MOTION_S`: `Err` with their total otherwise.
+    pub fn fits(&self, length: f32) -> Result<(), f32> {
+        let total = self.transition + length * self.plays as f32;
+        if total <= MAX_MOTION_S {
+            Ok(())
+        } else {
+            Err(total)
+        }
+    }
+}
+
 /// Smooth from 0 to 1 over [0, 1] with zero slope at both ends: the transition's blend.
 fn ease(s: f32) -> f32 {
     let s = s.clamp(0.0, 1.0);
@@ -268,9 +286,12 @@ impl Deformation {
     }
 
     /// The fastest any vertex of the exact mesh moves, in m/s, from positions sampled at
-    /// `SPEED_SAMPLE_RATE` over the transition and the motion.
+    /// `SPEED_SAMPLE_RATE` over the transition and the motion's first two plays (later plays
+    /// repeat the second, the step from one play's end to the next's start included).
     pub fn max_vertex_speed(&self) -> f32 {
-        let (from, to) = (self.timeline.start, self.end());
+        let tl = &self.timeline;
+        let two_plays = tl.start + tl.transition + 2.0 * self.motion_length();
+        let (from, to) = (tl.start, self.end().min(two_plays));
         let samples = ((to - from) * SPEED_SAMPLE_RATE).ceil().max(1.0) as usize;
         let dt = (to - from) / samples as f32;
         if dt <= 0.0 {

@@ -85,26 +85,25 @@ impl Motion {
         if t <= first.time {
             return hold(first);
         }
-        for w in self.keys.windows(2) {
-            let (a, b) = (&w[0], &w[1]);
-            if t < b.time {
-                let span = b.time - a.time;
-                let f = (t - a.time) / span;
-                // Shortest-arc rotation from a to b, as an angular velocity over the segment.
-                let mut delta = b.rotation * a.rotation.inverse();
-                if delta.w < 0.0 {
-                    delta = -delta;
-                }
-                let (axis, angle) = delta.to_axis_angle();
-                return BodyState {
-                    rotation: a.rotation.slerp(b.rotation, f),
-                    translation: a.translation.lerp(b.translation, f),
-                    linear_velocity: (b.translation - a.translation) / span,
-                    angular_velocity: axis * angle / span,
-                };
-            }
+        // The first key after t (keys are sorted): t lies in the segment that ends there.
+        let next = self.keys.partition_point(|k| k.time <= t);
+        let (Some(a), Some(b)) = (self.keys.get(next.wrapping_sub(1)), self.keys.get(next)) else {
+            return hold(self.keys.last().unwrap_or(first));
+        };
+        let span = b.time - a.time;
+        let f = (t - a.time) / span;
+        // Shortest-arc rotation from a to b, as an angular velocity over the segment.
+        let mut delta = b.rotation * a.rotation.inverse();
+        if delta.w < 0.0 {
+            delta = -delta;
         }
-        hold(self.keys.last().unwrap())
+        let (axis, angle) = delta.to_axis_angle();
+        BodyState {
+            rotation: a.rotation.slerp(b.rotation, f),
+            translation: a.translation.lerp(b.translation, f),
+            linear_velocity: (b.translation - a.translation) / span,
+            angular_velocity: axis * angle / span,
+        }
     }
 
     /// The fastest speed of any of `points` (body frame) over all segments, at most |v| + |ω|·r

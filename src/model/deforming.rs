@@ -3,7 +3,7 @@
 //! cache with rigid parts fitted to it.
 
 use crate::body::cache::{read_cache, read_obj_raw};
-use crate::body::deform::{Deformation, Timeline};
+use crate::body::deform::{Deformation, Timeline, MAX_MOTION_S};
 use crate::body::fit::fit_parts;
 use crate::body::gltf_read::{parse_skinned, read_skinned};
 use crate::body::Body;
@@ -88,6 +88,8 @@ pub fn build_deforming(
                 ));
             };
             let description = format!("animation {name:?} of {file}");
+            let k = &skinned.clips[clip];
+            too_long(c, table, "animation", &timeline, k.duration() - k.start())?;
             let d = Deformation::skinned(skinned, clip, timeline, description);
             Ok((body, Some(d)))
         }
@@ -130,6 +132,7 @@ pub fn build_deforming(
                 &cache.frames,
                 *parts as usize,
             );
+            too_long(c, table, "cache", &timeline, cache.duration())?;
             let description = format!(
                 "vertex cache {} at {fps} frames/s ({} frames)",
                 cache_file.display(),
@@ -151,4 +154,28 @@ pub fn build_deforming(
             "report this as a bug",
         )),
     }
+}
+
+/// Refuses a motion whose timeline (its transition and `plays` plays of `length` s) is longer
+/// than `MAX_MOTION_S`, naming `table`.`key`.
+fn too_long(
+    c: &Checker,
+    table: &str,
+    key: &str,
+    timeline: &Timeline,
+    length: f32,
+) -> Result<(), InputError> {
+    timeline.fits(length).map_err(|total| {
+        c.err(
+            table,
+            key,
+            format!(
+                "the motion lasts {total:.3e} s ({} play(s) of {length:.3e} s after a {} s \
+                 transition), longer than the {MAX_MOTION_S} s drapekit keys a body's motion over",
+                timeline.plays, timeline.transition
+            ),
+            "check the motion's timing (a cache's fps and its file's sample rate), or play it \
+             fewer times (plays)",
+        )
+    })
 }

@@ -127,6 +127,22 @@ pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings,
         }
         Some(RawSubsteps::Count(n)) => Some(c.count("solver", "substeps", *n, 1)?),
     };
+    // Each substep of a frame is prepared before the frame runs: a count past the limit is a
+    // typo, not a run (and the limit says so as it does for "auto").
+    let most = c.count(
+        "solver",
+        "max_substeps_per_frame",
+        s.max_substeps_per_frame,
+        1,
+    )?;
+    if let Some(n) = substeps.filter(|&n| n > most) {
+        return Err(c.err(
+            "solver",
+            "substeps",
+            format!("{n} substeps a frame is above solver.max_substeps_per_frame = {most}"),
+            "use fewer substeps (or \"auto\"), or raise solver.max_substeps_per_frame",
+        ));
+    }
     let integrator = match s.integrator.as_str() {
         "explicit" => INTEGRATOR_EXPLICIT,
         "symplectic" | "semi-implicit" => INTEGRATOR_SYMPLECTIC,
@@ -219,12 +235,7 @@ pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings,
                 "(the RMS force residual |f|/(m·g): 0.05 = 5% of each particle's weight)",
             )?,
         },
-        max_substeps_per_frame: c.count(
-            "solver",
-            "max_substeps_per_frame",
-            s.max_substeps_per_frame,
-            1,
-        )?,
+        max_substeps_per_frame: most,
         max_strain: c.positive("solver", "max_strain", s.max_strain, "(a strain: 1 = 100%)")?,
         max_memory_bytes: match s.max_memory_mb {
             Some(mb) => {

@@ -4,14 +4,15 @@
 use super::SEWING_SLIP_SPEED;
 use crate::body::motion::BodyState;
 use crate::body::Collider;
+use crate::error::InputError;
 use crate::model::layout::{BodyParams, BodyPose, MAX_BODIES, MAX_PARTS};
 use crate::model::ClothModel;
-use crate::scene::{BodySettings, Scene};
+use crate::scene::{BodySettings, DeformMotion, Scene};
 
 /// Tunnelling: no body surface point may move more than its body's thickness in one substep.
 /// Returns the substeps (raised to what the fastest body needs when `auto`), the fastest
 /// surface speed in m/s, and whether body speed raised the substeps; with a fixed count too
-/// small, warns instead.
+/// small, warns instead. A body that would need more than `max_substeps_per_frame` is refused.
 pub(super) fn body_speed_substeps(
     model: &ClothModel,
     scene: &Scene,
@@ -19,13 +20,28 @@ pub(super) fn body_speed_substeps(
     substeps: u32,
     auto: bool,
     warnings: &mut Vec<String>,
-) -> (u32, f32, bool) {
+) -> Result<(u32, f32, bool), InputError> {
     let (mut substeps, mut fastest, mut raised) = (substeps, 0.0f32, false);
     for (i, (c, settings)) in model.colliders.iter().zip(&scene.bodies).enumerate() {
         let speed = surface_speed(c);
         fastest = fastest.max(speed);
         let thickness = settings.thickness;
-        let needed = (speed * frame_dt / thickness).ceil() as u32;
+        let needed = (speed * frame_dt / thickness).ceil();
+        let most = scene.solver.max_substeps_per_frame;
+        if auto && (needed.is_nan() || needed > most as f32) {
+            return Err(scene.error(
+                &scene.body_table(i),
+                motion_key(settings),
+                format!(
+                    "its surface moves up to {speed:.3e} m/s: to move at most its thickness \
+                     ({thickness:.2e} m) a substep it needs {needed:.3e} substeps a frame, above \
+                     solver.max_substeps_per_frame = {most}"
+                ),
+                "check the motion's units and timing (a cache's fps, keyframe times), or raise \
+                 thickness_m or solver.max_substeps_per_frame",
+            ));
+        }
+        let needed = needed as u32;
         if needed > substeps {
             if auto {
                 substeps = needed;
@@ -41,7 +57,16 @@ pub(super) fn body_speed_substeps(
             }
         }
     }
-    (substeps, fastest, raised)
+    Ok((substeps, fastest, raised))
+}
+
+/// The scene key that moves body `settings`, for errors about its motion.
+fn motion_key(settings: &BodySettings) -> &'static str {
+    match settings.deform.as_ref().map(|d| &d.motion) {
+        Some(DeformMotion::Cache { .. }) => "cache",
+        Some(DeformMotion::Skin { .. }) => "animation",
+        None => "motion",
+    }
 }
 
 /// The fastest any point of the body's surface moves, in m/s: for a deforming body, the faster

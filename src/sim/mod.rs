@@ -268,7 +268,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         substeps,
         auto_substeps,
         &mut warnings,
-    );
+    )?;
     if body_limited {
         dt_limited_by = "body speed";
     }
