@@ -19,8 +19,9 @@ use std::process::ExitCode;
 struct Cli {
     #[command(subcommand)]
     command: Command,
-    /// Threads of the CPU backend (default: all cores). Results do not depend on it.
-    #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    /// Threads of the CPU backend (default: all cores; at most 4096). Results do not depend on
+    /// it.
+    #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
     threads: Option<u32>,
 }
 
@@ -281,11 +282,20 @@ fn main() -> ExitCode {
     // own whose loops need the pool, and a pool thread waiting for them would leave them one
     // thread fewer (on a one-thread pool, none). The pool's threads get 8 MiB stacks, as a
     // main thread usually has.
-    rayon::ThreadPoolBuilder::new()
+    let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(cli.threads.unwrap_or(0) as usize)
         .stack_size(8 << 20)
-        .build_global()
-        .expect("the global thread pool is built only here");
+        .build_global();
+    if let Err(e) = pool {
+        // Built only here, so the only failure is the system's: too many threads for it.
+        eprintln!(
+            "drapekit: cannot start the CPU backend's {} threads ({e})\n  fix: use fewer \
+             (--threads N, or RAYON_NUM_THREADS)",
+            cli.threads
+                .map_or_else(|| "default number of".to_string(), |n| n.to_string())
+        );
+        return ExitCode::from(2);
+    }
     let result = match cli.command {
         command @ Command::Batch(_) => execute(command),
         command => rayon::scope(|_| execute(command)),

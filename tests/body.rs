@@ -209,6 +209,27 @@ fn baked_grids_are_cached_by_mesh_and_resolution() {
     let (_, rc) = Sdf::bake_cached(body, 0.025, 0.04, Some(&dir)).unwrap();
     assert!(!rc.from_cache, "a new resolution is a new bake");
     assert_eq!(ra.bytes, 4 * a.values.len());
+    // A damaged cache file is baked again (and rewritten), never read: dims whose product
+    // wraps to zero against an empty grid (2³¹ · 2³¹ · 4 = 2⁶⁴), and a NaN among the values.
+    let file = std::path::PathBuf::from(ra.cache_file.unwrap());
+    let good = std::fs::read(&file).unwrap();
+    let mut wrapping = good[..36].to_vec();
+    for (k, d) in [1u32 << 31, 1 << 31, 4].iter().enumerate() {
+        wrapping[8 + 4 * k..12 + 4 * k].copy_from_slice(&d.to_le_bytes());
+    }
+    let mut nan = good.clone();
+    nan[36..40].copy_from_slice(&f32::NAN.to_le_bytes());
+    for damaged in [wrapping, nan] {
+        std::fs::write(&file, damaged).unwrap();
+        let (c, rd) = Sdf::bake_cached(body, 0.02, 0.04, Some(&dir)).unwrap();
+        assert!(!rd.from_cache, "a damaged cache was read");
+        assert_eq!(c, a);
+        assert_eq!(
+            std::fs::read(&file).unwrap(),
+            good,
+            "the cache was not rewritten"
+        );
+    }
 }
 
 #[test]

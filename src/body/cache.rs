@@ -299,6 +299,12 @@ fn parse_obj_raw(
                 if c.len() != 3 {
                     return Err(at_line("a `v` record needs three numbers".into()));
                 }
+                if c.iter().any(|x| !x.is_finite()) {
+                    return Err(at_line(format!(
+                        "vertex {} has a coordinate that is not a finite number ({c:?})",
+                        positions.len() + 1
+                    )));
+                }
                 positions.push(Vec3::new(c[0], c[1], c[2]));
             }
             Some("f") if faces => {

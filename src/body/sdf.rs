@@ -166,7 +166,8 @@ impl Sdf {
             from_cache,
             cache_file: file.as_ref().map(|f| f.display().to_string()),
         };
-        if let Some(sdf) = file.as_deref().and_then(Sdf::read) {
+        let cached = file.as_deref().and_then(Sdf::read);
+        if let Some(sdf) = cached.filter(|s| s.cell == cell) {
             let r = report(&sdf, 0.0, true);
             return Ok((sdf, r));
         }
@@ -193,6 +194,8 @@ impl Sdf {
         out
     }
 
+    /// A cached grid, or `None` for a file that is not one a bake wrote (damaged, truncated, or
+    /// holding numbers no bake gives): the body is then baked again.
     fn read(path: &Path) -> Option<Sdf> {
         let bytes = std::fs::read(path).ok()?;
         let header = 8 + 12 + 12 + 4;
@@ -202,17 +205,21 @@ impl Sdf {
         let u = |k: usize| u32::from_le_bytes(bytes[k..k + 4].try_into().unwrap());
         let f = |k: usize| f32::from_le_bytes(bytes[k..k + 4].try_into().unwrap());
         let dims = [u(8), u(12), u(16)];
-        let count = dims.iter().map(|&d| d as usize).product::<usize>();
-        if bytes.len() != header + 4 * count {
+        // Trilinear sampling needs two nodes along each axis; a product that overflows is no size.
+        let count = (dims.iter().map(|&d| d as usize))
+            .try_fold(1usize, |n, d| (d >= 2).then(|| n.checked_mul(d)).flatten())?;
+        if Some(bytes.len()) != count.checked_mul(4).and_then(|b| b.checked_add(header)) {
             return None;
         }
-        let values = bytes[header..]
+        let values: Vec<f32> = bytes[header..]
             .chunks_exact(4)
             .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
             .collect();
-        Some(Sdf {
-            origin: Vec3::new(f(20), f(24), f(28)),
-            cell: f(32),
+        let (origin, cell) = (Vec3::new(f(20), f(24), f(28)), f(32));
+        let finite = origin.is_finite() && cell > 0.0 && cell.is_finite();
+        (finite && values.iter().all(|v| v.is_finite())).then_some(Sdf {
+            origin,
+            cell,
             dims,
             values,
         })

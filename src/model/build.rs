@@ -53,6 +53,23 @@ impl Scene {
                 for p in &mut mesh.positions {
                     *p += *offset;
                 }
+                // Mass comes from area: a cloth of degenerate triangles has none to simulate.
+                let area: f64 = (mesh.triangles.iter())
+                    .map(|&t| mesh.triangle_area(t) as f64)
+                    .sum();
+                if area.is_nan() || area <= 0.0 {
+                    return Err(self.error(
+                        "cloth.mesh",
+                        "path",
+                        format!(
+                            "{}: its {} triangle(s) have no area (every one has its corners on a \
+                             line), so the cloth has no mass",
+                            path.display(),
+                            mesh.triangles.len()
+                        ),
+                        "export the cloth as a surface mesh with triangles of real area",
+                    ));
+                }
                 Ok(mesh)
             }
             ClothSource::Pattern { .. } => Ok(self.build_garment()?.expect("a pattern").mesh),
