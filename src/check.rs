@@ -200,14 +200,19 @@ impl Checker<'_> {
 
     /// A whole number from `min` to `u32::MAX`.
     pub fn count(&self, table: &str, key: &str, v: i64, min: i64) -> Result<u32, InputError> {
-        if v < min || v > u32::MAX as i64 {
-            return Err(self.err(
-                table,
-                key,
+        let (problem, fix) = if v < min {
+            (
                 format!("must be an integer of at least {min}, got {v}"),
                 format!("give a whole number ≥ {min}"),
-            ));
-        }
-        Ok(v as u32)
+            )
+        } else if v > u32::MAX as i64 {
+            (
+                format!("{v} is more than the {} a count can be", u32::MAX),
+                "give a smaller whole number".to_string(),
+            )
+        } else {
+            return Ok(v as u32);
+        };
+        Err(self.err(table, key, problem, fix))
     }
 }

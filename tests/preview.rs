@@ -181,6 +181,17 @@ fn a_cpu_run_can_be_previewed() {
     assert_eq!(frames[0].buffer().dimensions(), (64, 48));
     let both = preview(&["--frame", "6", "--out", gif.to_str().unwrap()]);
     assert_eq!(both.status.code(), Some(2));
+    // A run whose summary lists no frames has nothing to animate: bad input, no empty GIF.
+    let summary = dir.join("run/summary.json");
+    let mut s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    s["outputs"] = serde_json::json!([]);
+    std::fs::write(&summary, s.to_string()).unwrap();
+    let empty = dir.join("empty.gif");
+    let out = preview(&["--out", empty.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("holds no frame"));
+    assert!(!empty.exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -37,6 +37,10 @@ pub fn write_gif(
     fps: f32,
     out: &Path,
 ) -> Result<usize, Error> {
+    if frames.is_empty() {
+        // A GIF of no frames is no animation: the previewer's error says why there are none.
+        previewer.load(None)?;
+    }
     let shown = pick_frames(frames, MAX_ANIMATION_FRAMES);
     // One box around the cloth of every shown frame.
     let mut framing: Option<(glam::Vec3, glam::Vec3)> = None;

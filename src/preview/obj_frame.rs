@@ -49,7 +49,10 @@ pub fn read_obj(path: &Path) -> Result<FrameMesh, Error> {
     let broken = |n: usize| {
         bad(
             path,
-            format!("line {}: not an OBJ vertex or face", n + 1),
+            format!(
+                "line {}: not an OBJ vertex (three finite numbers) or face",
+                n + 1
+            ),
             "rerun drapekit run to rewrite the frame",
         )
     };
@@ -61,7 +64,8 @@ pub fn read_obj(path: &Path) -> Result<FrameMesh, Error> {
         match words.next() {
             Some("v") => {
                 let xyz: Vec<f32> = words.take(3).filter_map(|w| w.parse().ok()).collect();
-                if xyz.len() != 3 {
+                // A run never writes a non-finite vertex (it stops first): NaN is damage.
+                if xyz.len() != 3 || xyz.iter().any(|x| !x.is_finite()) {
                     return Err(broken(n));
                 }
                 m.positions.push(Vec3::from_slice(&xyz));
@@ -113,4 +117,28 @@ pub fn read_obj(path: &Path) -> Result<FrameMesh, Error> {
         m.uv.clear();
     }
     Ok(m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::read_obj;
+
+    #[test]
+    fn a_frame_with_a_vertex_that_is_not_a_finite_number_is_damaged() {
+        let dir = std::env::temp_dir().join(format!("drapekit-obj-frame-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for (name, x) in [("nan", "nan"), ("inf", "inf"), ("ok", "0.5")] {
+            let path = dir.join(format!("frame_{name}.obj"));
+            let text = format!("v 0 0 0\nv {x} 0 0\nv 0 1 0\nf 1 2 3\n");
+            std::fs::write(&path, text).unwrap();
+            match (name, read_obj(&path)) {
+                ("ok", r) => assert_eq!(r.unwrap().positions.len(), 3),
+                (_, r) => {
+                    let e = r.err().expect("a non-finite vertex was read").to_string();
+                    assert!(e.contains("line 2"), "{e}");
+                }
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
