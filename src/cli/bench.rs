@@ -17,13 +17,13 @@ pub struct BenchCli {
     #[command(subcommand)]
     command: Option<BenchCommand>,
     /// Grid sizes: N means an N×N particle grid.
-    #[arg(long, value_delimiter = ',', default_value = "64,128,256")]
+    #[arg(long, value_delimiter = ',', default_value = "64,128,256", value_parser = grid_size())]
     sizes: Vec<u32>,
     /// Substeps per timed batch (one submission on the GPU).
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
     substeps: u32,
     /// Timed batches per size and backend; the median is reported.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
     repeats: u32,
     /// Output folder for bench.csv and bench.md.
     #[arg(long, default_value = "out/bench")]
@@ -36,8 +36,14 @@ pub struct BenchCli {
     #[arg(long)]
     scene: Option<PathBuf>,
     /// With --scene: output frames per point (default: the scene's).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     frames: Option<u32>,
+}
+
+/// A benchmark grid's side in particles: an N×N grid from 2×2 (one cell) to 4096×4096 (16.8
+/// million particles, more than a GPU benchmark here has run).
+fn grid_size() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(2..=4096)
 }
 
 /// The benchmark subcommands.
@@ -94,7 +100,7 @@ struct ProfileArgs {
     out: PathBuf,
     /// Benchmark-cloth sizes (N: an N×N grid, springs and bending, symplectic Euler; 0: none,
     /// for a scene alone).
-    #[arg(long, value_delimiter = ',', default_value = "128,256,512,1024")]
+    #[arg(long, value_delimiter = ',', default_value = "128,256,512,1024", value_parser = grid_size())]
     sizes: Vec<u32>,
     /// Substeps profiled per size (and timed without timestamps beside them).
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
@@ -162,7 +168,7 @@ struct CollisionArgs {
     #[arg(long, default_value = "fixtures/scenes/skirt_collision.toml")]
     scene: PathBuf,
     /// Particle-count multiples of the scene's cloth (default 1,4,16; 1 with --quick).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=64))]
     scales: Vec<u32>,
     /// The strategies (default: all): gpu-sdf, sdf, bvh-aabb, bvh-obb, bvh-sphere, exact,
     /// exact+edges, brute (brute runs at the first scale only).
@@ -347,11 +353,11 @@ struct EffectsArgs {
 #[derive(Args)]
 struct PeerArgs {
     /// Grid sizes of the Warp comparison: N means Warp's N×N benchmark cloth.
-    #[arg(long, value_delimiter = ',', default_value = "64,128,256")]
+    #[arg(long, value_delimiter = ',', default_value = "64,128,256", value_parser = grid_size())]
     sizes: Vec<u32>,
     /// Grid sizes of the Newton comparison (Newton's two solvers and drapekit's two
     /// integrators).
-    #[arg(long, value_delimiter = ',', default_value = "64")]
+    #[arg(long, value_delimiter = ',', default_value = "64", value_parser = grid_size())]
     newton_sizes: Vec<u32>,
     /// Timed frames per point (default 60, one simulated second as in Warp's benchmark;
     /// 6 with --quick).
