@@ -10,11 +10,22 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// reader never sees a half-written file. The temporary name carries the process id and a
 /// counter: threads of one process (batch items baking the same SDF cache file) must not share
 /// it. On any failure the temporary file is removed and the error names `path`'s file and
-/// folder.
+/// folder. Only files are replaced: a rename would put a file in place of a folder's, a
+/// device's or a pipe's name (as root, of /dev/null), so those are refused.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
     static NEXT: AtomicU64 = AtomicU64::new(0);
     let dir = path.parent().unwrap_or(Path::new("."));
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
+    if std::fs::metadata(path).is_ok_and(|m| !m.is_file()) {
+        return Err(Error::Write {
+            file: name.to_string(),
+            dir: dir.to_path_buf(),
+            source: std::io::Error::other(
+                "it exists and is not a file (a folder, device or pipe), which drapekit does not \
+                 replace",
+            ),
+        });
+    }
     let n = NEXT.fetch_add(1, Ordering::Relaxed);
     let tmp = dir.join(format!(".{name}.{}.{n}{TEMP_SUFFIX}", std::process::id()));
     let written = write_file(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
@@ -105,5 +116,24 @@ mod tests {
         ] {
             assert!(!is_temporary(other), "{other}");
         }
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_name_that_is_not_a_file_is_not_replaced() {
+        let dir = std::env::temp_dir().join(format!("drapekit-atomic-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        // A socket stands for a device or a pipe: renaming a file onto it would succeed.
+        let socket = dir.join("out.png");
+        let _listener = std::os::unix::net::UnixListener::bind(&socket).unwrap();
+        let e = write_atomic(&socket, b"png").unwrap_err().to_string();
+        assert!(e.contains("is not a file"), "{e}");
+        assert!(!std::fs::metadata(&socket).unwrap().is_file());
+        let file = dir.join("out.txt");
+        write_atomic(&file, b"a").unwrap();
+        write_atomic(&file, b"b").unwrap();
+        assert_eq!(std::fs::read(&file).unwrap(), b"b");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }
