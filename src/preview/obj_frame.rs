@@ -113,6 +113,14 @@ pub fn read_obj(path: &Path) -> Result<FrameMesh, Error> {
         }
     }
     m.group_names = group_names;
+    if m.triangles.is_empty() {
+        // Every frame a run writes has the cloth's faces: an empty or cut file is damage.
+        return Err(bad(
+            path,
+            "holds no faces (an empty or cut-off frame)",
+            "rerun drapekit run to rewrite the frame",
+        ));
+    }
     if m.uv.len() != m.positions.len() {
         m.uv.clear();
     }
@@ -127,6 +135,10 @@ mod tests {
     fn a_frame_with_a_vertex_that_is_not_a_finite_number_is_damaged() {
         let dir = std::env::temp_dir().join(format!("drapekit-obj-frame-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
+        let empty = dir.join("frame_empty.obj");
+        std::fs::write(&empty, "").unwrap();
+        let e = read_obj(&empty).expect_err("an empty frame was read");
+        assert!(e.to_string().contains("holds no faces"), "{e}");
         for (name, x) in [("nan", "nan"), ("inf", "inf"), ("ok", "0.5")] {
             let path = dir.join(format!("frame_{name}.obj"));
             let text = format!("v 0 0 0\nv {x} 0 0\nv 0 1 0\nf 1 2 3\n");
@@ -134,7 +146,7 @@ mod tests {
             match (name, read_obj(&path)) {
                 ("ok", r) => assert_eq!(r.unwrap().positions.len(), 3),
                 (_, r) => {
-                    let e = r.err().expect("a non-finite vertex was read").to_string();
+                    let e = r.expect_err("a non-finite vertex was read").to_string();
                     assert!(e.contains("line 2"), "{e}");
                 }
             }
