@@ -53,27 +53,46 @@ impl Scene {
                 for p in &mut mesh.positions {
                     *p += *offset;
                 }
-                // Mass comes from area: a cloth of degenerate triangles has none to simulate.
-                let area: f64 = (mesh.triangles.iter())
-                    .map(|&t| mesh.triangle_area(t) as f64)
-                    .sum();
-                if area.is_nan() || area <= 0.0 {
-                    return Err(self.error(
-                        "cloth.mesh",
-                        "path",
-                        format!(
-                            "{}: its {} triangle(s) have no area (every one has its corners on a \
-                             line), so the cloth has no mass",
-                            path.display(),
-                            mesh.triangles.len()
-                        ),
-                        "export the cloth as a surface mesh with triangles of real area",
-                    ));
-                }
                 Ok(mesh)
             }
             ClothSource::Pattern { .. } => Ok(self.build_garment()?.expect("a pattern").mesh),
         }
+    }
+
+    /// Refuses a cloth in which no particle can move: one without mass (its triangles have no
+    /// area: a degenerate mesh, or a pattern whose units shrink it to a point), or one whose
+    /// every particle with mass is pinned or held.
+    fn something_moves(&self, model: &ClothModel) -> Result<(), InputError> {
+        let free = (model.masses.iter().zip(&model.pinned)).any(|(&m, &p)| !p && m > 0.0);
+        if free {
+            return Ok(());
+        }
+        if model.masses.iter().all(|&m| m <= 0.0) {
+            let (table, key) = match &self.cloth {
+                ClothSource::Mesh { .. } => ("cloth.mesh", "path"),
+                ClothSource::Pattern { .. } => ("cloth.pattern", "path"),
+                _ => ("cloth.grid", "width_m"),
+            };
+            return Err(self.error(
+                table,
+                key,
+                format!(
+                    "its {} triangle(s) have no area (every one has its corners on a line), so \
+                     the cloth has no mass",
+                    model.triangles.len()
+                ),
+                "give the cloth triangles of real area (check the mesh, or the pattern's units)",
+            ));
+        }
+        Err(self.error(
+            "pins",
+            "",
+            format!(
+                "all {} particles are pinned (or held by attach_labels): nothing can move",
+                model.len()
+            ),
+            "pin fewer particles",
+        ))
     }
 
     /// The particles held by `attach_labels` for the first `attach_frames` frames.
@@ -249,6 +268,7 @@ impl Scene {
         };
         let pinned: Vec<u32> = scene_pins.iter().chain(&attached).copied().collect();
         let mut model = ClothModel::from_mesh(&mesh, &self.fabric, &pinned);
+        self.something_moves(&model)?;
         let grain = match self.fabric.membrane {
             Some(_) => Some(self.grain_directions(&mesh, garment.as_ref())?),
             None => None,
