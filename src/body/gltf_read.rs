@@ -60,6 +60,19 @@ pub fn parse_skinned(
         )?;
     }
     let get = |b: gltf::Buffer| buffers.get(b.index()).map(|v| &v[..]);
+    // Each is the inverse of a joint's bind pose, so it must be finite and invertible itself
+    // (a zero matrix skinned every vertex to NaN).
+    let matrices = skin.reader(get).read_inverse_bind_matrices();
+    let singular = |c: &[[f32; 4]; 4]| {
+        let det = Mat4::from_cols_array_2d(c).determinant();
+        !(c.iter().flatten().all(|x| x.is_finite()) && det.is_finite() && det != 0.0)
+    };
+    if matrices.is_some_and(|mut m| m.any(|c| singular(&c))) {
+        return Err(bad(
+            "has an inverse bind matrix that is not finite or not invertible".into(),
+            "export the avatar again (its skin's bind pose is damaged)",
+        ));
+    }
     let joints: Vec<gltf::Node> = skin.joints().collect();
     let order = parents_first(doc, &joints);
     // Position of each joint (in the skin's list) in `order`.
@@ -551,6 +564,23 @@ fn clips<'s>(
             };
             let sorted = times.windows(2).all(|w| w[0] <= w[1]);
             let finite = times.iter().all(|t| t.is_finite());
+            // A rotation key must be a rotation: finite and of non-zero length (it is
+            // normalised when played).
+            let good_values = match &values {
+                Values::Translation(v) | Values::Scale(v) => v.iter().all(|x| x.is_finite()),
+                Values::Rotation(v) => {
+                    (v.iter().map(|q| q.length())).all(|len| len.is_finite() && len > 0.0)
+                }
+            };
+            if !good_values {
+                return Err(bad(
+                    format!(
+                        "animation '{name}' has a key value that is not a finite number, or a \
+                         rotation whose length is zero or not finite"
+                    ),
+                    "export the animation again (bake it to keyframes)",
+                ));
+            }
             if times.is_empty() || count != per_key * times.len() || !sorted || !finite {
                 return Err(bad(
                     format!(
