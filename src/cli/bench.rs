@@ -46,6 +46,17 @@ fn grid_size() -> clap::builder::RangedI64ValueParser<u32> {
     clap::value_parser!(u32).range(2..=4096)
 }
 
+/// `grid_size`, or 0 for no grid (`bench profile` of a scene alone).
+fn grid_size_or_none(text: &str) -> Result<u32, String> {
+    match text.trim().parse::<u32>() {
+        Ok(n) if n == 0 || (2..=4096).contains(&n) => Ok(n),
+        Ok(n) => Err(format!(
+            "{n} is not 0 (no grid) or a grid side from 2 to 4096"
+        )),
+        Err(e) => Err(format!("{text:?} is not a whole number ({e})")),
+    }
+}
+
 /// The benchmark subcommands.
 #[derive(Subcommand)]
 enum BenchCommand {
@@ -100,7 +111,7 @@ struct ProfileArgs {
     out: PathBuf,
     /// Benchmark-cloth sizes (N: an N×N grid, springs and bending, symplectic Euler; 0: none,
     /// for a scene alone).
-    #[arg(long, value_delimiter = ',', default_value = "128,256,512,1024", value_parser = grid_size())]
+    #[arg(long, value_delimiter = ',', default_value = "128,256,512,1024", value_parser = grid_size_or_none)]
     sizes: Vec<u32>,
     /// Substeps profiled per size (and timed without timestamps beside them).
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
