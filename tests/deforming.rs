@@ -145,6 +145,54 @@ fn a_written_skinned_gltf_reads_back_and_poses_as_expected() {
 }
 
 #[test]
+fn rotation_keys_must_be_rotations_and_cubic_tangents_may_be_zero() {
+    let quarter = Quat::from_rotation_z(std::f32::consts::FRAC_PI_2);
+    let zero = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
+    let with_keys = |values: Vec<Quat>, interpolation| SkinnedMesh {
+        mesh: TriMesh {
+            positions: REST.to_vec(),
+            triangles: vec![[0, 1, 2]],
+        },
+        influences: vec![only(0), only(1), halves()],
+        skeleton: two_joints(),
+        clips: vec![Clip {
+            name: "bend".into(),
+            channels: vec![Channel {
+                joint: 1,
+                times: vec![0.0, 1.0],
+                values: Values::Rotation(values),
+                interpolation,
+            }],
+        }],
+    };
+    let read = |body: &SkinnedMesh| {
+        let bytes = skinned_glb(body, "arm").expect("small");
+        parse_skinned(&bytes, None, Path::new("arm.glb"), "body.path")
+    };
+    // A cubic spline's in- and out-tangents of zero (as exporters write them): read.
+    let cubic = vec![zero, Quat::IDENTITY, zero, zero, quarter, zero];
+    let back = read(&with_keys(cubic, Interpolation::CubicSpline)).unwrap();
+    let clip = back.clip("bend").expect("the clip keeps its name");
+    let posed = back.posed(&clip.pose(&back.skeleton, 1.0));
+    for (p, want) in posed.iter().zip(TURNED) {
+        assert!(p.distance(want) < 1e-6, "{p} != {want}");
+    }
+    // A key's value of zero length, or NaN, is no rotation: refused, naming the animation.
+    let nan = Quat::from_xyzw(f32::NAN, 0.0, 0.0, 1.0);
+    for bad in [
+        with_keys(
+            vec![zero, zero, zero, zero, quarter, zero],
+            Interpolation::CubicSpline,
+        ),
+        with_keys(vec![Quat::IDENTITY, nan], Interpolation::Linear),
+        with_keys(vec![zero, quarter], Interpolation::Linear),
+    ] {
+        let e = read(&bad).expect_err("no rotation was read").to_string();
+        assert!(e.contains("animation 'bend'"), "{e}");
+    }
+}
+
+#[test]
 fn a_skinned_body_blends_from_its_rest_pose_and_plays_its_clip() {
     // The fixture's one joint turns 45° about y over 1 s; every vertex follows it.
     let path = common::fixture("bodies/skinned_tetra.gltf");
@@ -174,6 +222,50 @@ fn a_skinned_body_blends_from_its_rest_pose_and_plays_its_clip() {
     let want = fastest * std::f32::consts::FRAC_PI_4;
     // Sampled at 60/s as chords of the arc: within 0.1% of the arc speed.
     assert!((speed - want).abs() < 1e-3 * want, "{speed} vs {want}");
+}
+
+#[test]
+fn a_motion_played_three_times_is_as_fast_as_its_full_timeline_says() {
+    // The turn of 45° over 1 s, played three times: each play ends at 45° and the next starts
+    // at 0°, a jump of 45° between samples. The speed estimates look at the transition and two
+    // plays only; a scan of the whole timeline (every vertex's move between positions sampled
+    // 60 times a second, as the estimate samples them) must find nothing faster.
+    let m = read_skinned(&common::fixture("bodies/skinned_tetra.gltf"), "body.path").unwrap();
+    let timeline = Timeline {
+        start: 1.0,
+        transition: 0.5,
+        plays: 3,
+    };
+    let d = Deformation::skinned(m, 0, timeline, "test".into());
+    let (from, to) = (timeline.start, d.end());
+    let samples = ((to - from) * 60.0).ceil() as usize;
+    let dt = (to - from) / samples as f32;
+    let mut full = 0.0f32;
+    for k in 1..=samples {
+        let (a, b) = (from + (k - 1) as f32 * dt, from + k as f32 * dt);
+        let moved = (d.positions_at(a).iter().zip(d.positions_at(b)))
+            .map(|(p, q)| p.distance(q))
+            .fold(0.0, f32::max);
+        full = full.max(moved / dt);
+    }
+    let speed = d.max_vertex_speed();
+    // The same 60/s grid from the same start over the first two plays, then a repeat: equal
+    // but for the rounding of the sample times (f32 at a few seconds, ulps of a speed).
+    assert!(
+        (speed - full).abs() <= 1e-4 * full,
+        "{speed} vs the full scan's {full}"
+    );
+    // The parts' speed too: the wrap's jump lies within the keys it looks at.
+    let one_play = Deformation::skinned(
+        read_skinned(&common::fixture("bodies/skinned_tetra.gltf"), "body.path").unwrap(),
+        0,
+        Timeline {
+            plays: 1,
+            ..timeline
+        },
+        "test".into(),
+    );
+    assert!(d.max_part_speed() > 10.0 * one_play.max_part_speed());
 }
 
 /// A closed tetrahedron's OBJ text with the given vertices.

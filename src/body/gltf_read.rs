@@ -564,13 +564,16 @@ fn clips<'s>(
             };
             let sorted = times.windows(2).all(|w| w[0] <= w[1]);
             let finite = times.iter().all(|t| t.is_finite());
-            // A rotation key must be a rotation: finite and of non-zero length (it is
-            // normalised when played).
+            // A rotation key must be a rotation: of finite, non-zero length (it is normalised
+            // when played). A cubic spline's tangents (the first and third of each key's three
+            // values) need only be finite: zero tangents are common.
             let good_values = match &values {
                 Values::Translation(v) | Values::Scale(v) => v.iter().all(|x| x.is_finite()),
-                Values::Rotation(v) => {
-                    (v.iter().map(|q| q.length())).all(|len| len.is_finite() && len > 0.0)
-                }
+                Values::Rotation(v) => v.iter().enumerate().all(|(k, q)| {
+                    let tangent = per_key == 3 && k % 3 != 1;
+                    let len = q.length();
+                    q.is_finite() && (tangent || (len.is_finite() && len > 0.0))
+                }),
             };
             if !good_values {
                 return Err(bad(
