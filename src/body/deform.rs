@@ -311,8 +311,10 @@ impl Deformation {
     }
 
     /// The fastest any part's surface moves as collision sees it (its vertices under its rigid
-    /// motion), in m/s.
+    /// motion), in m/s, over the transition and the first two plays (as `max_vertex_speed`).
     pub fn max_part_speed(&self) -> f32 {
+        let tl = &self.timeline;
+        let two_plays = tl.start + tl.transition + 2.0 * self.motion_length();
         (0..self.part_count())
             .map(|p| {
                 let points: Vec<Vec3> = (self.rest.iter().zip(&self.part_influences))
@@ -329,6 +331,7 @@ impl Deformation {
                 // bound of `Motion::max_surface_speed` adds the speeds of the part's origin (at
                 // the rest pose's origin, far from a limb) and of its turn, many times a hand's.
                 (m.keys.windows(2))
+                    .take_while(|w| w[0].time < two_plays)
                     .map(|w| {
                         let s = m.at(0.5 * (w[0].time + w[1].time));
                         (points.iter())
