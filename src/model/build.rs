@@ -61,10 +61,14 @@ impl Scene {
 
     /// Refuses a cloth in which no particle can move: one without mass (its triangles have no
     /// area: a degenerate mesh, or a pattern whose units shrink it to a point), or one whose
-    /// every particle with mass is pinned or held.
-    fn something_moves(&self, model: &ClothModel) -> Result<(), InputError> {
-        let free = (model.masses.iter().zip(&model.pinned)).any(|(&m, &p)| !p && m > 0.0);
-        if free {
+    /// every particle with mass is among `pins` (the scene's; particles held by
+    /// `attach_labels` are let go later).
+    fn something_moves(&self, model: &ClothModel, pins: &[u32]) -> Result<(), InputError> {
+        let mut pinned = vec![false; model.len()];
+        for &p in pins {
+            pinned[p as usize] = true;
+        }
+        if (model.masses.iter().zip(&pinned)).any(|(&m, &p)| !p && m > 0.0) {
             return Ok(());
         }
         if model.masses.iter().all(|&m| m <= 0.0) {
@@ -87,10 +91,7 @@ impl Scene {
         Err(self.error(
             "pins",
             "",
-            format!(
-                "all {} particles are pinned (or held by attach_labels): nothing can move",
-                model.len()
-            ),
+            format!("all {} particles are pinned: nothing can move", model.len()),
             "pin fewer particles",
         ))
     }
@@ -268,7 +269,7 @@ impl Scene {
         };
         let pinned: Vec<u32> = scene_pins.iter().chain(&attached).copied().collect();
         let mut model = ClothModel::from_mesh(&mesh, &self.fabric, &pinned);
-        self.something_moves(&model)?;
+        self.something_moves(&model, &scene_pins)?;
         let grain = match self.fabric.membrane {
             Some(_) => Some(self.grain_directions(&mesh, garment.as_ref())?),
             None => None,

@@ -60,12 +60,14 @@ pub(super) fn body_speed_substeps(
     Ok((substeps, fastest, raised))
 }
 
-/// The scene key that moves body `settings`, for errors about its motion.
+/// The scene key that moves body `settings`, for errors about its motion: a rigid body's
+/// comes from `motion` or from `[[body.keyframes]]`, which the settings do not tell apart, so
+/// the error names its table alone.
 fn motion_key(settings: &BodySettings) -> &'static str {
     match settings.deform.as_ref().map(|d| &d.motion) {
         Some(DeformMotion::Cache { .. }) => "cache",
         Some(DeformMotion::Skin { .. }) => "animation",
-        None => "motion",
+        None => "",
     }
 }
 
