@@ -14,12 +14,13 @@ pub(super) struct RawBody {
     path: Option<String>,
     #[serde(default = "crate::check::default_units")]
     units: String,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "super::raw::exactly")]
     offset_m: [f64; 3],
     shape: Option<String>,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "super::raw::exactly")]
     center_m: [f64; 3],
     radius_m: Option<f64>,
+    #[serde(default, deserialize_with = "super::raw::exactly_if_given")]
     half_extents_m: Option<[f64; 3]>,
     half_height_m: Option<f64>,
     #[serde(default = "default_resolution")]
@@ -68,9 +69,9 @@ pub(super) struct RawBody {
 #[serde(deny_unknown_fields)]
 struct RawKeyframe {
     time_s: f64,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "super::raw::exactly")]
     translation_m: [f64; 3],
-    #[serde(default)]
+    #[serde(default, deserialize_with = "super::raw::exactly")]
     rotation_deg: [f64; 3],
 }
 

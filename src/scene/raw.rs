@@ -1,6 +1,26 @@
 //! The scene file as TOML gives it: serde structs with defaults, before validation.
 
-use serde::Deserialize;
+use serde::{Deserialize, Deserializer};
+
+/// A TOML array of exactly `N` numbers. serde's fixed-size arrays stop reading after `N` and
+/// ignore the rest, so `center_m = [0.0, 1.5, 0.0, 1.0]` would pass as a position.
+pub(super) fn exactly<'de, D: Deserializer<'de>, const N: usize>(
+    d: D,
+) -> Result<[f64; N], D::Error> {
+    let values = Vec::<f64>::deserialize(d)?;
+    let found = values.len();
+    values.try_into().map_err(|_| {
+        // Worded as serde's own, which `toml_message` turns into the key's error.
+        serde::de::Error::invalid_length(found, &format!("an array of length {N}").as_str())
+    })
+}
+
+/// `exactly`, for a key that may be left out (with `#[serde(default)]`).
+pub(super) fn exactly_if_given<'de, D: Deserializer<'de>, const N: usize>(
+    d: D,
+) -> Result<Option<[f64; N]>, D::Error> {
+    exactly(d).map(Some)
+}
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -81,8 +101,9 @@ fn default_closed_gap() -> f64 {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawPlacement {
+    #[serde(deserialize_with = "exactly")]
     pub(super) translation: [f64; 3],
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exactly")]
     pub(super) rotation_deg: [f64; 3],
 }
 
@@ -93,7 +114,7 @@ pub(super) struct RawGrid {
     pub(super) height_m: f64,
     pub(super) columns: u32,
     pub(super) rows: u32,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exactly")]
     pub(super) center_m: [f64; 3],
     #[serde(default = "default_plane")]
     pub(super) plane: String,
@@ -109,7 +130,7 @@ pub(super) struct RawMesh {
     pub(super) path: String,
     #[serde(default = "crate::check::default_units")]
     pub(super) units: String,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exactly")]
     pub(super) offset_m: [f64; 3],
 }
 #[derive(Deserialize)]
@@ -141,14 +162,16 @@ pub(super) struct RawPin {
     pub(super) corners: Option<Vec<String>>,
     pub(super) edge: Option<String>,
     pub(super) indices: Option<Vec<i64>>,
+    #[serde(default, deserialize_with = "exactly_if_given")]
     pub(super) box_min_m: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "exactly_if_given")]
     pub(super) box_max_m: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawWorld {
-    #[serde(default = "default_gravity")]
+    #[serde(default = "default_gravity", deserialize_with = "exactly")]
     pub(super) gravity_m_s2: [f64; 3],
     #[serde(default)]
     pub(super) air_damping_per_s: f64,
@@ -173,6 +196,7 @@ fn default_gravity() -> [f64; 3] {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawWind {
+    #[serde(deserialize_with = "exactly")]
     pub(super) velocity_m_s: [f64; 3],
     #[serde(default = "default_air_density")]
     pub(super) air_density_kg_m3: f64,
@@ -325,7 +349,9 @@ impl Default for RawOutput {
 pub(super) enum RawCamera {
     Preset(String),
     Custom {
+        #[serde(deserialize_with = "exactly")]
         eye: [f64; 3],
+        #[serde(deserialize_with = "exactly")]
         target: [f64; 3],
         #[serde(default = "default_fov")]
         fov_deg: f64,
@@ -352,6 +378,7 @@ pub(super) struct RawPreview {
     pub(super) colors: Vec<String>,
     pub(super) checker_m: Option<f64>,
     pub(super) texture: Option<String>,
+    #[serde(default, deserialize_with = "exactly_if_given")]
     pub(super) texture_size_m: Option<[f64; 2]>,
 }
 
