@@ -167,3 +167,26 @@ fn bench_profile_with_nothing_to_profile_is_bad_input() {
     assert!(stderr.contains("nothing to profile"), "{stderr}");
     assert!(!dir.exists(), "nothing may be written");
 }
+
+#[test]
+fn a_bench_output_folder_that_is_a_file_is_refused_before_anything_runs() {
+    let dir = out_dir("gpu_profile", "out-file");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("report");
+    std::fs::write(&file, "kept").unwrap();
+    let out = file.to_str().unwrap();
+    for args in [
+        &["bench", "--sizes", "8", "--out", out][..],
+        &["bench", "profile", "--sizes", "8", "--out", out],
+        &["bench", "fabric", "--tests", "cusick", "--out", out],
+    ] {
+        let r = drapekit(args);
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("is a file, not a folder"),
+            "{args:?}: {stderr}"
+        );
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "kept");
+    }
+}

@@ -192,6 +192,12 @@ fn a_cpu_run_can_be_previewed() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("holds no frame"));
     assert!(!empty.exists());
+    // A summary whose fps is not a rate: frame times would be infinite (GIF delays of minutes).
+    s["fps"] = serde_json::json!(0.0);
+    std::fs::write(&summary, s.to_string()).unwrap();
+    let out = preview(&["--out", dir.join("zero-fps.png").to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not a positive number"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 

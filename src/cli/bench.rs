@@ -409,8 +409,33 @@ struct PeerArgs {
     peer_device: String,
 }
 
-/// Runs `drapekit bench …`.
+impl BenchCommand {
+    /// The subcommand's output folder.
+    fn out(&self) -> &std::path::Path {
+        match self {
+            BenchCommand::Peer(p) => &p.out,
+            BenchCommand::Accuracy(a) => &a.out,
+            BenchCommand::Effects(e) => &e.out,
+            BenchCommand::Fabric(f) => &f.out,
+            BenchCommand::Collision(c) => &c.out,
+            BenchCommand::Convergence(c) => &c.out,
+            BenchCommand::Profile(p) => &p.out,
+        }
+    }
+}
+
+/// Runs `drapekit bench …`. An output folder that names a file is refused before anything
+/// runs (the reports are written at the end, minutes later).
 pub fn execute(b: BenchCli) -> Result<(), Error> {
+    let out = b.command.as_ref().map_or(b.out.as_path(), |c| c.out());
+    if out.exists() && !out.is_dir() {
+        return Err(Error::Input(drapekit::error::InputError::new(
+            out,
+            "--out",
+            "is a file, not a folder: the benchmark writes its reports into a folder",
+            "give a folder (it is made if it does not exist)",
+        )));
+    }
     match (b.command, b.scene) {
         (Some(BenchCommand::Peer(p)), _) => run_peer(p),
         (Some(BenchCommand::Accuracy(a)), _) => {

@@ -120,6 +120,14 @@ fn run_summary(run: &Path) -> Result<(Option<Scene>, f32, Option<FrameList>), Er
         })?;
     let scene = crate::run_folder::run_scene(run, &summary)?;
     let fps = summary["fps"].as_f64().unwrap_or(24.0) as f32;
+    if !(fps.is_finite() && fps > 0.0) {
+        // Frame times (and a GIF's delays) are frame numbers over it.
+        return Err(bad(
+            &summary_path,
+            format!("its fps, {fps}, is not a positive number of frames per second"),
+            "rerun drapekit run (the summary is damaged)",
+        ));
+    }
     let frames = crate::run_folder::summary_frames(run, &summary);
     Ok((scene, fps, frames))
 }

@@ -45,7 +45,14 @@ pub fn frames(run: &Path) -> Result<Vec<(u32, PathBuf)>, Error> {
 /// Reads the `v`, `vt`, `g` and `f` records of an OBJ file. `vt` are kept only when there is
 /// one per vertex, as drapekit writes them (`f a/a/a`).
 pub fn read_obj(path: &Path) -> Result<FrameMesh, Error> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    // A frame the run listed but that cannot be read is a damaged run folder: bad input.
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        bad(
+            path,
+            format!("cannot read the frame ({e})"),
+            "rerun drapekit run to rewrite the frame",
+        )
+    })?;
     let broken = |n: usize| {
         bad(
             path,
@@ -135,6 +142,9 @@ mod tests {
     fn a_frame_with_a_vertex_that_is_not_a_finite_number_is_damaged() {
         let dir = std::env::temp_dir().join(format!("drapekit-obj-frame-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
+        let gone = read_obj(&dir.join("frame_gone.obj")).expect_err("a missing frame was read");
+        assert!(gone.to_string().contains("cannot read the frame"), "{gone}");
+        assert_eq!(gone.exit_code(), 2, "a damaged run folder is bad input");
         let empty = dir.join("frame_empty.obj");
         std::fs::write(&empty, "").unwrap();
         let e = read_obj(&empty).expect_err("an empty frame was read");
