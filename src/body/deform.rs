@@ -268,6 +268,14 @@ impl Deformation {
             .collect()
     }
 
+    /// Where the speed estimates stop: the end of the second play (later plays repeat it, the
+    /// step from one play's end to the next's start included), or of the timeline if sooner.
+    fn speed_scan_end(&self) -> f32 {
+        let tl = &self.timeline;
+        self.end()
+            .min(tl.start + tl.transition + 2.0 * self.motion_length())
+    }
+
     /// How many collision parts.
     pub fn part_count(&self) -> usize {
         self.part_influences_parts()
@@ -286,12 +294,10 @@ impl Deformation {
     }
 
     /// The fastest any vertex of the exact mesh moves, in m/s, from positions sampled at
-    /// `SPEED_SAMPLE_RATE` over the transition and the motion's first two plays (later plays
-    /// repeat the second, the step from one play's end to the next's start included).
+    /// `SPEED_SAMPLE_RATE` over the transition and the motion's first two plays
+    /// (`speed_scan_end`).
     pub fn max_vertex_speed(&self) -> f32 {
-        let tl = &self.timeline;
-        let two_plays = tl.start + tl.transition + 2.0 * self.motion_length();
-        let (from, to) = (tl.start, self.end().min(two_plays));
+        let (from, to) = (self.timeline.start, self.speed_scan_end());
         let samples = ((to - from) * SPEED_SAMPLE_RATE).ceil().max(1.0) as usize;
         let dt = (to - from) / samples as f32;
         if dt <= 0.0 {
@@ -313,8 +319,7 @@ impl Deformation {
     /// The fastest any part's surface moves as collision sees it (its vertices under its rigid
     /// motion), in m/s, over the transition and the first two plays (as `max_vertex_speed`).
     pub fn max_part_speed(&self) -> f32 {
-        let tl = &self.timeline;
-        let two_plays = tl.start + tl.transition + 2.0 * self.motion_length();
+        let two_plays = self.speed_scan_end();
         (0..self.part_count())
             .map(|p| {
                 let points: Vec<Vec3> = (self.rest.iter().zip(&self.part_influences))

@@ -43,15 +43,20 @@ pub struct BenchCli {
 /// A benchmark grid's side in particles: an N×N grid from 2×2 (one cell) to 4096×4096 (16.8
 /// million particles, more than a GPU benchmark here has run).
 fn grid_size() -> clap::builder::RangedI64ValueParser<u32> {
-    clap::value_parser!(u32).range(2..=4096)
+    clap::value_parser!(u32).range(*GRID_SIDES.start() as i64..=*GRID_SIDES.end() as i64)
 }
+
+/// The grid sides `grid_size` takes.
+const GRID_SIDES: std::ops::RangeInclusive<u32> = 2..=4096;
 
 /// `grid_size`, or 0 for no grid (`bench profile` of a scene alone).
 fn grid_size_or_none(text: &str) -> Result<u32, String> {
     match text.trim().parse::<u32>() {
-        Ok(n) if n == 0 || (2..=4096).contains(&n) => Ok(n),
+        Ok(n) if n == 0 || GRID_SIDES.contains(&n) => Ok(n),
         Ok(n) => Err(format!(
-            "{n} is not 0 (no grid) or a grid side from 2 to 4096"
+            "{n} is not 0 (no grid) or a grid side from {} to {}",
+            GRID_SIDES.start(),
+            GRID_SIDES.end()
         )),
         Err(e) => Err(format!("{text:?} is not a whole number ({e})")),
     }
