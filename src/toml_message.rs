@@ -199,12 +199,16 @@ fn wrong_type(place: &Place, found: &str, expected: &str) -> (String, String, St
         .or_else(|| between(found, "\"", "\""))
         .unwrap_or("");
     let number: Option<f64> = literal.parse().ok();
+    let quoted = found.starts_with("string");
     let fix = match (whole_number(expected), number) {
+        (true, Some(x)) if x.fract() == 0.0 && quoted => {
+            format!("write `{key} = {x}`, without quotes")
+        }
         (true, Some(x)) if x.fract() == 0.0 => {
             format!("write `{key} = {x}`, without a decimal point")
         }
         (true, _) => format!("write a whole number, e.g. `{key} = 2`"),
-        (false, Some(_)) if found.starts_with("string") && is_number(expected) => {
+        (false, Some(_)) if quoted && is_number(expected) => {
             format!(
                 "write `{key} = {literal}` (a number{}, without quotes)",
                 unit_note(key)
@@ -377,6 +381,9 @@ mod tests {
         assert_eq!(location, "solver.frames");
         assert_eq!(problem, "expected a whole number, found the decimal 48.0");
         assert_eq!(fix, "write `frames = 48`, without a decimal point");
+        let (_, problem, fix) = explain("invalid type: string \"1\", expected u32", &place);
+        assert_eq!(problem, "expected a whole number ≥ 0, found the text \"1\"");
+        assert_eq!(fix, "write `frames = 1`, without quotes");
     }
 
     #[test]

@@ -175,7 +175,10 @@ fn markdown(report: &Report) -> String {
                 .or_default()
                 .push(report.cell(r, "id"));
         }
-        if let Ok(t) = report.cell(r, "item_seconds").parse::<f64>() {
+        // A time that is not a finite, non-negative number (a hand-edited or damaged item
+        // file) is left out rather than turning every statistic into NaN.
+        let time = report.cell(r, "item_seconds").parse::<f64>();
+        if let Some(t) = time.ok().filter(|t| t.is_finite() && *t >= 0.0) {
             times.push(t);
         }
     }
@@ -240,6 +243,33 @@ mod tests {
         assert_eq!(percentile(&v, 90.0), 9.0);
         assert_eq!(percentile(&v, 99.0), 10.0);
         assert_eq!(percentile(&[3.0], 50.0), 3.0);
+    }
+
+    #[test]
+    fn item_times_that_are_not_finite_are_left_out_of_the_statistics() {
+        let row = |id: &str, seconds: &str| {
+            let mut r = vec![String::new(); COLUMNS.len()];
+            let at = |c: &str| COLUMNS.iter().position(|x| *x == c).unwrap();
+            r[at("id")] = id.into();
+            r[at("status")] = "ok".into();
+            r[at("item_seconds")] = seconds.into();
+            r
+        };
+        let report = Report {
+            rows: vec![
+                row("a", "2.0"),
+                row("b", "NaN"),
+                row("c", "inf"),
+                row("d", "-1"),
+            ],
+            partial: 0,
+        };
+        let md = markdown(&report);
+        assert!(
+            md.contains("| 1 | 2.00 | 2.00 | 2.00 | 2.00 | 2.00 | 2.0 |"),
+            "{md}"
+        );
+        assert!(!md.contains("NaN") && !md.contains("inf"), "{md}");
     }
 
     #[test]

@@ -420,6 +420,11 @@ impl Pattern {
     }
 }
 
+/// The largest panel coordinate read, in the pattern's units: past it the geometry's squares and
+/// cross products overflow. (Whether a panel fits the solver's 32-bit positions is checked once
+/// it is placed, with the particle spacing.)
+const MAX_COORDINATE: f64 = 1e100;
+
 fn read_panel(r: &Reader, name: &str, p: &Value, relative: bool) -> Result<Panel, InputError> {
     let loc = format!("panel '{name}'");
     let translation = match p.get("translation") {
@@ -449,7 +454,17 @@ fn read_panel(r: &Reader, name: &str, p: &Value, relative: bool) -> Result<Panel
     }
     let mut vertices = Vec::new();
     for (k, v) in raw_vertices.iter().enumerate() {
-        let [x, y] = r.vec::<2>(Some(v), &format!("{loc}, vertex {k}"))?;
+        let vloc = format!("{loc}, vertex {k}");
+        let [x, y] = r.vec::<2>(Some(v), &vloc)?;
+        // Past this every later test (zero-length edges, crossings, areas) answers nonsense.
+        if x.abs().max(y.abs()) > MAX_COORDINATE {
+            return Err(r.err(
+                vloc,
+                format!("lies at [{x:e}, {y:e}], beyond any garment"),
+                "give the vertex its real coordinates, in the pattern's units (check the \
+                 exponent for a slip)",
+            ));
+        }
         vertices.push(DVec2::new(x, y));
     }
     let raw_edges = p.get("edges").and_then(Value::as_array).ok_or_else(|| {

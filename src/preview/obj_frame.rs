@@ -42,6 +42,9 @@ pub fn frames(run: &Path) -> Result<Vec<(u32, PathBuf)>, Error> {
     Ok(out)
 }
 
+/// The farthest a frame's vertex may lie from the origin, in m (on any axis).
+const MAX_COORDINATE_M: f32 = 1e6;
+
 /// Reads the `v`, `vt`, `g` and `f` records of an OBJ file. `vt` are kept only when there is
 /// one per vertex, as drapekit writes them (`f a/a/a`).
 pub fn read_obj(path: &Path) -> Result<FrameMesh, Error> {
@@ -74,6 +77,19 @@ pub fn read_obj(path: &Path) -> Result<FrameMesh, Error> {
                 // A run never writes a non-finite vertex (it stops first): NaN is damage.
                 if xyz.len() != 3 || xyz.iter().any(|x| !x.is_finite()) {
                     return Err(broken(n));
+                }
+                // Framing squares coordinates: near f32's limit they overflow and the picture
+                // comes out blank. A thousand kilometres is far past any scene's cloth.
+                if xyz.iter().any(|x| x.abs() > MAX_COORDINATE_M) {
+                    return Err(bad(
+                        path,
+                        format!(
+                            "line {}: a vertex lies beyond {MAX_COORDINATE_M:e} m of the \
+                             origin, which no garment does",
+                            n + 1
+                        ),
+                        "rerun drapekit run to rewrite the frame",
+                    ));
                 }
                 m.positions.push(Vec3::from_slice(&xyz));
             }
@@ -149,7 +165,12 @@ mod tests {
         std::fs::write(&empty, "").unwrap();
         let e = read_obj(&empty).expect_err("an empty frame was read");
         assert!(e.to_string().contains("holds no faces"), "{e}");
-        for (name, x) in [("nan", "nan"), ("inf", "inf"), ("ok", "0.5")] {
+        for (name, x) in [
+            ("nan", "nan"),
+            ("inf", "inf"),
+            ("far", "-3e38"),
+            ("ok", "0.5"),
+        ] {
             let path = dir.join(format!("frame_{name}.obj"));
             let text = format!("v 0 0 0\nv {x} 0 0\nv 0 1 0\nf 1 2 3\n");
             std::fs::write(&path, text).unwrap();
