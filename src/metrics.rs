@@ -5,6 +5,7 @@ use crate::model::{ClothModel, Spring};
 use crate::pattern::garment::SeamPair;
 use crate::solver::ParticleState;
 use glam::Vec4;
+use rayon::prelude::*;
 
 /// Largest relative stretch (L − L0)/L0 over all springs.
 pub fn max_edge_strain(positions: &[Vec4], springs: &[Spring]) -> f32 {
@@ -120,8 +121,10 @@ pub fn body_distances(
     positions: &[Vec4],
 ) -> Vec<f32> {
     let inverse = body.rotation.inverse();
+    // Every frame, for every particle: on the 5 mm shirt, about 1 ms per thousand particles on
+    // one core, so it runs on the pool.
     positions
-        .iter()
+        .par_iter()
         .map(|p| {
             collider
                 .exact
@@ -144,7 +147,7 @@ pub fn deformed_distances(
     };
     let exact = crate::body::exact::ExactBody::new(&mesh)?;
     Ok(positions
-        .iter()
+        .par_iter()
         .map(|p| exact.query(p.truncate()).0)
         .collect())
 }

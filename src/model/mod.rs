@@ -84,13 +84,19 @@ impl<T: Copy> Csr<T> {
         for i in 0..n {
             offsets[i + 1] += offsets[i];
         }
-        let mut sorted = pairs.to_vec();
-        // A stable sort keeps each particle's items in input order, which fixes the sum order.
-        sorted.sort_by_key(|&(p, _)| p);
-        Csr {
-            offsets,
-            items: sorted.into_iter().map(|(_, item)| item).collect(),
+        // A counting sort: each particle's items land in input order, which fixes the sum
+        // order (what a stable sort by particle gives, in one pass).
+        // Particle p's items fill offsets[p]..offsets[p + 1] exactly, and these ranges tile
+        // the list, so every slot of the placeholder fill is overwritten.
+        let mut next = offsets.clone();
+        let mut items = pairs
+            .first()
+            .map_or(Vec::new(), |&(_, x)| vec![x; pairs.len()]);
+        for &(p, item) in pairs {
+            items[next[p as usize] as usize] = item;
+            next[p as usize] += 1;
         }
+        Csr { offsets, items }
     }
 }
 

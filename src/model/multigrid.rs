@@ -12,7 +12,6 @@ use super::coloring::greedy_coloring;
 use super::{ClothModel, Csr};
 use crate::mesh::Charted;
 use crate::pattern::transfer::Transfer;
-use rayon::slice::ParallelSliceMut;
 
 /// Where a block-sparse matrix keeps its 3×3 blocks: row i's are `offsets[i]..offsets[i + 1]`,
 /// the first the diagonal, then the row's other columns in increasing order.
@@ -28,20 +27,24 @@ impl BlockPattern {
     /// The pattern with the diagonal and every `(row, column)` pair given (duplicates merged).
     fn from_pairs(rows: usize, pairs: &mut Vec<(u32, u32)>) -> BlockPattern {
         pairs.extend((0..rows as u32).map(|i| (i, i)));
-        // The diagonal sorts first in its row.
-        pairs.par_sort_unstable_by_key(|&(i, j)| (i, j != i, j));
-        pairs.dedup();
-        let mut offsets = vec![0u32; rows + 1];
-        for &(i, _) in pairs.iter() {
-            offsets[i as usize + 1] += 1;
-        }
+        // Bucketed by row in one pass, then each row's few columns sorted on their own: a
+        // coarse level's millions of pairs fall into rows of tens.
+        let by_row = Csr::from_pairs(rows, pairs);
+        let mut offsets = Vec::with_capacity(rows + 1);
+        offsets.push(0u32);
+        let mut columns = Vec::with_capacity(by_row.items.len());
+        let mut row = Vec::new();
         for i in 0..rows {
-            offsets[i + 1] += offsets[i];
+            let range = by_row.offsets[i] as usize..by_row.offsets[i + 1] as usize;
+            row.clear();
+            row.extend_from_slice(&by_row.items[range]);
+            // The diagonal sorts first in its row.
+            row.sort_unstable_by_key(|&j| (j != i as u32, j));
+            row.dedup();
+            columns.extend_from_slice(&row);
+            offsets.push(columns.len() as u32);
         }
-        BlockPattern {
-            offsets,
-            columns: pairs.iter().map(|&(_, j)| j).collect(),
-        }
+        BlockPattern { offsets, columns }
     }
 
     /// Number of rows (particles).
@@ -275,12 +278,12 @@ fn coarse_level(len: usize, finer: &BlockPattern, transfer: &Transfer) -> Level 
     }
     let mut pairs: Vec<(u32, u32)> = terms.iter().map(|t| (t.0, t.1)).collect();
     let pattern = BlockPattern::from_pairs(len, &mut pairs);
-    let mut galerkin_pairs: Vec<(u32, (u32, f32))> = terms
+    // Each coarse block sums its terms in finer-block order, the same on every backend: the
+    // terms come in finer-block order, and `Csr::from_pairs` keeps it within each coarse block.
+    let galerkin_pairs: Vec<(u32, (u32, f32))> = terms
         .iter()
         .map(|&(ci, cj, b, w)| (pattern.find(ci, cj).expect("in the pattern"), (b, w)))
         .collect();
-    // Each coarse block sums its terms in finer-block order, the same on every backend.
-    galerkin_pairs.par_sort_by_key(|&(c, (b, _))| (c, b));
     let galerkin = Csr::from_pairs(pattern.blocks(), &galerkin_pairs);
     let (order, color_offsets) = greedy_coloring(len, &pattern.offsets, &pattern.columns);
     Level {
@@ -384,6 +387,29 @@ mod tests {
         }
         // Nothing of the product lies outside the coarse pattern.
         assert!(dense.iter().flatten().all(|&v| v.abs() < 1e-9));
+    }
+
+    #[test]
+    fn coarse_rows_are_sorted_and_sum_their_terms_in_finer_block_order() {
+        let (model, fine) = sheet(9);
+        let mg = Multigrid::build(&model, &fine, &[Charted::grid(1.0, 1.0, 5, 5)]);
+        let level = &mg.levels[0];
+        for r in 0..level.len() {
+            let row = &level.pattern.columns
+                [level.pattern.offsets[r] as usize..level.pattern.offsets[r + 1] as usize];
+            assert_eq!(row[0], r as u32, "row {r}: the diagonal first");
+            assert!(row[1..].windows(2).all(|w| w[0] < w[1]), "row {r}: {row:?}");
+            assert!(
+                !row[1..].contains(&(r as u32)),
+                "row {r}: the diagonal twice"
+            );
+        }
+        // The summation order the backends share: each coarse block's terms by finer block.
+        let g = &level.galerkin;
+        for c in 0..level.pattern.blocks() {
+            let terms = &g.items[g.offsets[c] as usize..g.offsets[c + 1] as usize];
+            assert!(terms.windows(2).all(|w| w[0].0 <= w[1].0), "block {c}");
+        }
     }
 
     #[test]

@@ -19,7 +19,8 @@ pub const RAYS: usize = 16;
 const LIFT: f32 = 5e-4;
 
 /// Each vertex's unoccluded fraction on the side its normal points to and on the other side,
-/// for every mesh in order (a mesh without triangles gets none).
+/// for every mesh in order (a mesh without triangles gets none). The inner side of a closed
+/// mesh is never seen: it is left unshaded (1) without casting its rays.
 pub fn ambient_occlusion(meshes: &[DrawMesh]) -> Vec<Vec<[f32; 2]>> {
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
@@ -45,10 +46,11 @@ pub fn ambient_occlusion(meshes: &[DrawMesh]) -> Vec<Vec<[f32; 2]>> {
                     if n == Vec3::ZERO {
                         return [1.0; 2];
                     }
-                    [
-                        open(&scene, *p, n, k, &directions),
-                        open(&scene, *p, -n, k, &directions),
-                    ]
+                    let inner = match m.closed {
+                        true => 1.0,
+                        false => open(&scene, *p, -n, k, &directions),
+                    };
+                    [open(&scene, *p, n, k, &directions), inner]
                 })
                 .collect()
         })
@@ -127,5 +129,25 @@ mod tests {
         let mid = 4 * 9 + 4;
         let [front, back] = ao[0][mid];
         assert!(front < 0.25 && back == 1.0, "front {front}, back {back}");
+    }
+
+    #[test]
+    fn a_closed_meshs_inner_side_is_not_shaded() {
+        // A sheet 2 cm behind the first: it occludes the first's back side, unless the first
+        // is the outside of a closed body, whose back side nobody sees.
+        let behind = square(Vec3::new(0.0, 0.0, -0.02), Vec3::X, Vec3::Y, 8);
+        let mid = 4 * 9 + 4;
+        for closed in [false, true] {
+            let front = DrawMesh {
+                closed,
+                ..square(Vec3::ZERO, Vec3::X, Vec3::Y, 8)
+            };
+            let [outer, inner] = ambient_occlusion(&[front, behind.clone()])[0][mid];
+            assert_eq!(outer, 1.0, "nothing is in front of it");
+            match closed {
+                true => assert_eq!(inner, 1.0),
+                false => assert!(inner < 0.25, "inner {inner}"),
+            }
+        }
     }
 }

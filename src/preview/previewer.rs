@@ -417,6 +417,7 @@ impl<'a> Previewer<'a> {
                 positions: self.body_positions(i, frame),
                 colors: vec![BODY; body.mesh.positions.len()],
                 triangles: body.mesh.triangles.clone(),
+                closed: true,
                 ..Default::default()
             });
         }

@@ -30,6 +30,9 @@ pub struct DrawMesh {
     pub occlusion: Vec<[f32; 2]>,
     /// Whether the fabric image covers this mesh (at `uv`).
     pub textured: bool,
+    /// A closed, outward-facing surface (a body): only the side its normals point to is ever
+    /// seen, so ambient occlusion shades that side alone.
+    pub closed: bool,
 }
 
 impl DrawMesh {
