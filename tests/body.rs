@@ -80,6 +80,35 @@ fn open_and_non_manifold_meshes_are_refused_and_flips_repaired() {
     assert!(signed_volume(&inside_out) > 0.0);
 }
 
+#[test]
+fn each_piece_of_a_body_is_turned_to_face_out() {
+    // A large box and, beside it, a small one inside out (a second object of the file): the
+    // whole mesh's volume is positive, yet the small piece must be turned too, or its
+    // distance field and shading would read it from the inside.
+    let mut mesh = shapes::cuboid(Vec3::ZERO, Vec3::ONE);
+    let small = shapes::cuboid(Vec3::new(3.0, 0.0, 0.0), Vec3::splat(0.1));
+    let base = mesh.positions.len() as u32;
+    mesh.positions.extend(&small.positions);
+    (mesh.triangles).extend(
+        small
+            .triangles
+            .iter()
+            .map(|t| [t[0], t[2], t[1]].map(|i| i + base)),
+    );
+    assert!(
+        signed_volume(&mesh) > 0.0,
+        "the whole mesh reads as outward"
+    );
+    let r = close_and_orient(&mut mesh).unwrap();
+    assert!(r.turned_outside_out);
+    let piece = TriMesh {
+        positions: mesh.positions.clone(),
+        triangles: mesh.triangles[12..].to_vec(),
+    };
+    assert!(signed_volume(&piece) > 0.0, "the small box still faces in");
+    assert!(signed_volume(&mesh) > signed_volume(&shapes::cuboid(Vec3::ZERO, Vec3::ONE)));
+}
+
 /// A cube exported as a DCC tool writes it: every face with its own texture coordinates, and
 /// two objects. OBJ loaders split such vertices; a body welds them back and is closed.
 #[test]

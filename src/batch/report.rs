@@ -269,7 +269,7 @@ mod tests {
             md.contains("| 1 | 2.00 | 2.00 | 2.00 | 2.00 | 2.00 | 2.0 |"),
             "{md}"
         );
-        assert!(!md.contains("NaN") && !md.contains("inf"), "{md}");
+        assert!(!md.contains("NaN") && !md.contains("| inf"), "{md}");
     }
 
     #[test]

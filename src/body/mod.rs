@@ -162,7 +162,8 @@ impl std::fmt::Debug for Collider {
 pub struct Repairs {
     /// Faces whose winding was flipped to agree with their neighbours.
     pub flipped_faces: usize,
-    /// Whether the whole mesh was inside out (negative volume) and was flipped.
+    /// Whether the mesh, or one of its closed pieces, was inside out (negative volume) and was
+    /// flipped.
     pub turned_outside_out: bool,
 }
 
@@ -202,6 +203,7 @@ pub fn close_and_orient(mesh: &mut TriMesh) -> Result<Repairs, String> {
     // Propagate one orientation across shared edges (breadth first, per connected piece).
     let n = mesh.triangles.len();
     let mut seen = vec![false; n];
+    let mut piece_faces: Vec<Vec<usize>> = Vec::new();
     let mut repairs = Repairs::default();
     let directed = |t: &[u32; 3], a: u32, b: u32| (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b);
     for start in 0..n {
@@ -209,6 +211,8 @@ pub fn close_and_orient(mesh: &mut TriMesh) -> Result<Repairs, String> {
             continue;
         }
         seen[start] = true;
+        piece_faces.push(vec![start]);
+        let piece = piece_faces.last_mut().expect("just pushed");
         let mut queue = std::collections::VecDeque::from([start]);
         while let Some(f) = queue.pop_front() {
             let t = mesh.triangles[f];
@@ -224,28 +228,36 @@ pub fn close_and_orient(mesh: &mut TriMesh) -> Result<Repairs, String> {
                         repairs.flipped_faces += 1;
                     }
                     seen[g] = true;
+                    piece.push(g);
                     queue.push_back(g);
                 }
             }
         }
     }
-    if signed_volume(mesh) < 0.0 {
-        for t in &mut mesh.triangles {
-            t.swap(1, 2);
+    // Each closed piece faces out on its own: one piece inside out (a separate object of the
+    // file, say) would otherwise survive a check of the whole mesh's volume.
+    for faces in &piece_faces {
+        let volume: f64 = faces.iter().map(|&f| triangle_volume(mesh, f)).sum();
+        if volume < 0.0 {
+            for &f in faces {
+                mesh.triangles[f].swap(1, 2);
+            }
+            repairs.turned_outside_out = true;
         }
-        repairs.turned_outside_out = true;
     }
     Ok(repairs)
 }
 
+/// The signed volume of the tetrahedron from the origin to face `f`, in m³.
+fn triangle_volume(mesh: &TriMesh, f: usize) -> f64 {
+    let [a, b, c] = mesh.triangles[f].map(|i| mesh.positions[i as usize].as_dvec3());
+    a.dot(b.cross(c)) / 6.0
+}
+
 /// Signed volume (positive for outward-facing closed meshes), in m³.
 pub fn signed_volume(mesh: &TriMesh) -> f64 {
-    mesh.triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3());
-            a.dot(b.cross(c)) / 6.0
-        })
+    (0..mesh.triangles.len())
+        .map(|f| triangle_volume(mesh, f))
         .sum()
 }
 

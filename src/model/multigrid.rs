@@ -25,8 +25,7 @@ pub struct BlockPattern {
 
 impl BlockPattern {
     /// The pattern with the diagonal and every `(row, column)` pair given (duplicates merged).
-    fn from_pairs(rows: usize, pairs: &mut Vec<(u32, u32)>) -> BlockPattern {
-        pairs.extend((0..rows as u32).map(|i| (i, i)));
+    fn from_pairs(rows: usize, pairs: &[(u32, u32)]) -> BlockPattern {
         // Bucketed by row in one pass, then each row's few columns sorted on their own: a
         // coarse level's millions of pairs fall into rows of tens.
         let by_row = Csr::from_pairs(rows, pairs);
@@ -37,6 +36,7 @@ impl BlockPattern {
         for i in 0..rows {
             let range = by_row.offsets[i] as usize..by_row.offsets[i + 1] as usize;
             row.clear();
+            row.push(i as u32);
             row.extend_from_slice(&by_row.items[range]);
             // The diagonal sorts first in its row.
             row.sort_unstable_by_key(|&j| (j != i as u32, j));
@@ -210,7 +210,7 @@ fn fine_structure(model: &ClothModel) -> (BlockPattern, ElementBlocks) {
     for m in &model.membranes {
         clique(&m.v[..3]);
     }
-    let pattern = BlockPattern::from_pairs(model.len(), &mut pairs);
+    let pattern = BlockPattern::from_pairs(model.len(), &pairs);
     let block = |row: u32, column: u32| pattern.find(row, column).expect("in the pattern");
     let springs = model.spring_csr();
     let hinges = model.hinge_csr();
@@ -276,8 +276,8 @@ fn coarse_level(len: usize, finer: &BlockPattern, transfer: &Transfer) -> Level 
             }
         }
     }
-    let mut pairs: Vec<(u32, u32)> = terms.iter().map(|t| (t.0, t.1)).collect();
-    let pattern = BlockPattern::from_pairs(len, &mut pairs);
+    let pairs: Vec<(u32, u32)> = terms.iter().map(|t| (t.0, t.1)).collect();
+    let pattern = BlockPattern::from_pairs(len, &pairs);
     // Each coarse block sums its terms in finer-block order, the same on every backend: the
     // terms come in finer-block order, and `Csr::from_pairs` keeps it within each coarse block.
     let galerkin_pairs: Vec<(u32, (u32, f32))> = terms

@@ -176,9 +176,13 @@ mod tests {
             std::fs::write(&path, text).unwrap();
             match (name, read_obj(&path)) {
                 ("ok", r) => assert_eq!(r.unwrap().positions.len(), 3),
+                ("far", r) => {
+                    let e = r.expect_err("a vertex 3e38 m away was read").to_string();
+                    assert!(e.contains("line 2: a vertex lies beyond"), "{e}");
+                }
                 (_, r) => {
                     let e = r.expect_err("a non-finite vertex was read").to_string();
-                    assert!(e.contains("line 2"), "{e}");
+                    assert!(e.contains("line 2: not an OBJ vertex"), "{e}");
                 }
             }
         }

@@ -5,10 +5,10 @@
 # (wall_seconds) and the settled frame.
 cd "$(dirname "$0")/../../.."
 run() { # bin scene tag
-  local out=$OUT_DIR/ab_$3
-  rm -rf $out
+  local out="${OUT_DIR:?set OUT_DIR}/ab_$3"
+  rm -rf "$out"
   local s=$(date +%s.%N)
-  $BIN_DIR/drapekit_$1 run fixtures/scenes/$2.toml --backend cpu --out $out --quiet >/dev/null 2>&1
+  "${BIN_DIR:?set BIN_DIR}/drapekit_$1" run "fixtures/scenes/$2.toml" --backend cpu --out "$out" --quiet >/dev/null 2>&1
   local e=$(date +%s.%N)
   python3 -c "import json;s=json.load(open('$out/summary.json'));print('$1 $2 whole %.2f sim %.2f settled %s' % ($e-$s, s['wall_seconds'], s['settled']['frame']))"
 }
