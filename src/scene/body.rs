@@ -448,11 +448,36 @@ fn parse(c: &Checker, base: &Path, b: &RawBody, t: &str) -> Result<BodySettings,
                 "sort the keyframes by time",
             ));
         }
+        if let Some(before) = k.checked_sub(1).map(|j| b.keyframes[j].rotation_deg) {
+            let turn = (0..3)
+                .map(|a| (kf.rotation_deg[a] - before[a]).abs())
+                .fold(0.0, f64::max);
+            // Slerp goes the shorter way round: 360° would read as no turn at all, 270° as
+            // 90° the other way.
+            if turn >= 180.0 {
+                return Err(c.err(
+                    &table,
+                    "rotation_deg",
+                    format!(
+                        "turns {turn}° from the keyframe before; the motion between two \
+                         keyframes takes the shorter way round, so it would not turn as written"
+                    ),
+                    "add keyframes in between, each less than 180° from the last",
+                ));
+            }
+        }
     }
     let motion = match (b.motion.as_deref(), keys.is_empty()) {
         (None, _) => Motion { keys },
         (Some("turn-right-left"), true) => Motion::turn_right_left(
-            c.finite(t, "turn_angle_deg", b.turn_angle_deg)?,
+            // Its middle leg turns twice the angle, and a leg takes the shorter way round.
+            c.within(
+                t,
+                "turn_angle_deg",
+                b.turn_angle_deg,
+                (-89.0, 89.0),
+                "degrees",
+            )?,
             c.positive(t, "turn_period_s", b.turn_period_s, "s")?,
             c.non_negative(t, "motion_start_s", b.motion_start_s, "s")?,
         ),

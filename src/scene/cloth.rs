@@ -153,7 +153,15 @@ pub(super) fn parse(
                     Some(v) => c.positive(t, "seam_sewing_time_s", v, "s")?,
                     None => 0.0,
                 },
-                closed_gap: c.positive(t, "seam_closed_gap_m", p.seam_closed_gap_m, "m")?,
+                // Past a centimetre, open seams would count as sewn (and be welded shut in
+                // the glTF export).
+                closed_gap: c.within(
+                    t,
+                    "seam_closed_gap_m",
+                    p.seam_closed_gap_m,
+                    (1e-6, 0.01),
+                    "m",
+                )?,
                 folds: {
                     let mut folds = Vec::new();
                     for (k, seam) in p.seams.iter().enumerate() {

@@ -299,6 +299,7 @@ pub fn warnings(scene: &Scene) -> Vec<String> {
             scene.fabric.damping_ratio
         ));
     }
+    out.extend(world_warnings(scene));
     for (i, b) in scene.bodies.iter().enumerate() {
         if b.friction > 2.0 {
             out.push(format!(
@@ -309,4 +310,88 @@ pub fn warnings(scene: &Scene) -> Vec<String> {
         }
     }
     out
+}
+
+/// Gravity and air no room on Earth has, and phases that start after the run has ended.
+fn world_warnings(scene: &Scene) -> Vec<String> {
+    let mut out = Vec::new();
+    let g = scene.gravity.length();
+    if g > 3.0 * 9.81 {
+        out.push(format!(
+            "world.gravity_m_s2 is {g} m/s², {:.0} times Earth's 9.81 m/s²",
+            g / 9.81
+        ));
+    }
+    if scene.air_damping > 100.0 {
+        out.push(format!(
+            "world.air_damping_per_s = {} stops any motion within {:.0} ms: the cloth will crawl \
+             instead of falling (still air is about 0.1 to 5 /s)",
+            scene.air_damping,
+            1e3 / scene.air_damping
+        ));
+    }
+    let run_s = scene.solver.frames as f64 / scene.solver.fps as f64;
+    if g > 0.0 && scene.gravity_start as f64 >= run_s {
+        out.push(format!(
+            "world.gravity_start_s = {} s is at or after the run's end ({run_s:.3} s): gravity \
+             never comes on",
+            scene.gravity_start
+        ));
+    }
+    if let ClothSource::Pattern { sewing_time, .. } = &scene.cloth {
+        if *sewing_time as f64 > run_s {
+            out.push(format!(
+                "cloth.pattern.seam_sewing_time_s = {} s is longer than the run ({run_s:.3} s): \
+                 the seams are still being drawn shut when it ends",
+                sewing_time
+            ));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    /// The warnings of a small hanging cloth with `world` as its [world] table.
+    fn world_warned(world: &str) -> Vec<String> {
+        let text = format!(
+            "[cloth.grid]\nwidth_m = 1.0\nheight_m = 1.0\ncolumns = 8\nrows = 8\n\
+             center_m = [0.0, 1.5, 0.0]\n\n[fabric]\npreset = \"cotton\"\n\n[world]\n{world}\n\n\
+             [solver]\nfps = 24\nframes = 24\n"
+        );
+        warnings(&Scene::parse(&text, Path::new("scene.toml")).unwrap())
+    }
+
+    #[test]
+    fn gravity_and_air_no_room_has_and_gravity_after_the_end_are_warned() {
+        assert!(world_warned("gravity_m_s2 = [0.0, -9.81, 0.0]").is_empty());
+        let strong = world_warned("gravity_m_s2 = [0.0, -1000.0, 0.0]");
+        assert!(strong[0].contains("102 times Earth's"), "{strong:?}");
+        let thick = world_warned("air_damping_per_s = 1e4");
+        assert!(thick[0].contains("the cloth will crawl"), "{thick:?}");
+        // 24 frames at 24 fps: the run ends at 1 s.
+        assert!(world_warned("gravity_start_s = 0.99").is_empty());
+        let late = world_warned("gravity_start_s = 1.0");
+        assert!(late[0].contains("gravity never comes on"), "{late:?}");
+        assert!(world_warned("gravity_start_s = 5.0\ngravity_m_s2 = [0.0, 0.0, 0.0]").is_empty());
+    }
+
+    #[test]
+    fn seams_still_being_drawn_shut_at_the_end_are_warned() {
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes/tshirt_drape_cotton.toml");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let sewing = |frames: &str| {
+            let text = text.replace("frames = 240", frames);
+            let scene = Scene::parse(&text, &path).unwrap();
+            let w = warnings(&scene);
+            w.iter().any(|w| w.contains("still being drawn shut"))
+        };
+        // seam_sewing_time_s = 0.6 at 24 fps: 14 frames end at 0.583 s, 15 at 0.625 s.
+        assert!(sewing("frames = 14"));
+        assert!(!sewing("frames = 15"));
+    }
 }

@@ -236,7 +236,15 @@ pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings,
             )?,
         },
         max_substeps_per_frame: most,
-        max_strain: c.positive("solver", "max_strain", s.max_strain, "(a strain: 1 = 100%)")?,
+        // Below 10%, a garment's first frames would read as exploded; above 100 (10,000%),
+        // the guard never fires.
+        max_strain: c.within(
+            "solver",
+            "max_strain",
+            s.max_strain,
+            (0.1, 100.0),
+            "(a strain: 1 = 100%)",
+        )?,
         max_memory_bytes: match s.max_memory_mb {
             Some(mb) => {
                 Some((c.positive("solver", "max_memory_mb", mb, "MiB")? as f64 * 1048576.0) as u64)
