@@ -456,6 +456,26 @@ fn plan_names_what_limits_the_substep() {
         let plan: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
         assert_eq!(plan["dt_limited_by"], term, "{scene}");
     }
+    // The flag in air a thousand times denser: the drag rate γ = ρ·C_d·|v|·(1 + gust)/σ
+    // outruns the springs, and `auto` must take substeps with γ·dt < 2 (the explicit drag
+    // update's bound), or the cloth's speed oscillates and blows up.
+    let shipped = common::fixture("scenes/flag_wind.toml");
+    let text = std::fs::read_to_string(&shipped).unwrap();
+    assert!(text.contains("air_density_kg_m3 = 1.225") && text.contains("density_kg_m2 = 0.12"));
+    let dense = out_dir("plan-dense-wind").join("flag_dense_air.toml");
+    std::fs::create_dir_all(dense.parent().unwrap()).unwrap();
+    std::fs::write(
+        &dense,
+        text.replace("air_density_kg_m3 = 1.225", "air_density_kg_m3 = 1000.0"),
+    )
+    .unwrap();
+    let r = drapekit(&["plan", dense.to_str().unwrap(), "--json"]);
+    let plan: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    assert_eq!(plan["dt_limited_by"], "wind drag", "{plan:#}");
+    let speed = (6.0f64.hypot(1.5)) * 1.3;
+    let rate = 1000.0 * 1.2 * speed / 0.12;
+    let dt = plan["dt"].as_f64().unwrap();
+    assert!(rate * dt < 2.0, "γ·dt = {}", rate * dt);
 }
 
 /// Runs the shipped scene `fixtures/scenes/{scene}.toml` whole on the CPU path: its output

@@ -231,6 +231,16 @@ pub(super) fn check(c: &Checker, scene: &Scene) -> Result<(), InputError> {
     check_wind(c, scene, frame)
 }
 
+/// The rate γ = ρ·C_d·|v|·(1 + gust)/σ, per s, at which the wind's drag pulls the cloth's speed
+/// toward the wind's at its strongest gust (0 without wind).
+pub fn wind_drag_rate(scene: &Scene) -> f64 {
+    let Some(w) = &scene.wind else {
+        return 0.0;
+    };
+    let speed = w.velocity.as_dvec3().length() * (1.0 + w.gust_amplitude as f64);
+    w.air_density as f64 * w.drag_coefficient as f64 * speed / scene.fabric.density as f64
+}
+
 /// Wind drag relaxes the cloth's speed toward the wind's at the rate γ = ρ·C_d·|v|/σ (the
 /// drag force's derivative in speed over the mass per area σ); the explicit drag update is
 /// stable only for γ·h < 2, so a drag that no allowed substep can follow is bad input.
@@ -250,8 +260,7 @@ fn check_wind(c: &Checker, scene: &Scene, frame: f64) -> Result<(), InputError> 
             fix,
         )?;
     }
-    let rate =
-        w.air_density as f64 * w.drag_coefficient as f64 * speed / scene.fabric.density as f64;
+    let rate = wind_drag_rate(scene);
     let s = &scene.solver;
     // The shortest substep the scene allows: its own, or the most `auto` may choose.
     let (step, steps_key) = match s.substeps {
@@ -285,6 +294,12 @@ fn check_wind(c: &Checker, scene: &Scene, frame: f64) -> Result<(), InputError> 
 pub fn warnings(scene: &Scene) -> Vec<String> {
     let mut out = Vec::new();
     if let Some(w) = &scene.wind {
+        if w.air_density > 5.0 {
+            out.push(format!(
+                "wind.air_density_kg_m3 = {} is denser than any air (1.2 kg/m³ at sea level)",
+                w.air_density
+            ));
+        }
         if w.drag_coefficient > 3.0 {
             out.push(format!(
                 "wind.drag_coefficient = {} is above any cloth's or flat plate's (1 to 2)",

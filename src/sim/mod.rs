@@ -185,11 +185,19 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     let stable_step = if implicit {
         None
     } else {
-        model.stable_step(
+        let cloth = model.stable_step(
             s.integrator,
             scene.air_damping,
             scene.fabric.tangent_ratio(),
-        )
+        );
+        // The drag's explicit update is stable for γ·dt < 2, like the damping bound.
+        let drag = crate::scene::limits::wind_drag_rate(scene);
+        let wind = (drag > 0.0).then(|| ((2.0 / drag) as f32, "wind drag"));
+        match (cloth, wind) {
+            (Some(c), Some(w)) if w.0 < c.0 => Some(w),
+            (None, _) => None,
+            (c, _) => c,
+        }
     };
     let stable_dt = stable_step.map(|(dt, _)| dt);
     // What sets the substep: the scene, or the stability bound's binding term (body speed
@@ -239,7 +247,17 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
                          above max_substeps_per_frame = {}",
                         s.max_substeps_per_frame
                     ),
-                        "lower stretch_stiffness_n_m, coarsen the cloth, or raise solver.max_substeps_per_frame",
+                        match dt_limited_by {
+                            "wind drag" => {
+                                "lower wind.drag_coefficient (cloth: 1 to 2) or \
+                                            wind.air_density_kg_m3, or raise \
+                                            solver.max_substeps_per_frame"
+                            }
+                            _ => {
+                                "lower stretch_stiffness_n_m, coarsen the cloth, or raise \
+                                  solver.max_substeps_per_frame"
+                            }
+                        },
                     )
                     .into());
             }
