@@ -208,62 +208,55 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     };
     let mut warnings = Vec::new();
     warnings.extend(metrics::mesh_warnings(&model, garment.is_none()));
-    let (substeps, auto_substeps) = match s.substeps {
-        Some(n) if implicit => (n, false),
-        None if implicit => (1, true),
-        Some(n) => {
-            let dt = frame_dt / n as f32;
-            match stable_dt {
-                Some(bound) if dt > bound => warnings.push(format!(
-                    "substep {dt:.3e} s exceeds the estimated stable step {bound:.3e} s; \
+    let (substeps, auto_substeps) =
+        match s.substeps {
+            Some(n) if implicit => (n, false),
+            None if implicit => (1, true),
+            Some(n) => {
+                let dt = frame_dt / n as f32;
+                match stable_dt {
+                    Some(bound) if dt > bound => warnings.push(format!(
+                        "substep {dt:.3e} s exceeds the estimated stable step {bound:.3e} s; \
                      the run may blow up (use substeps = \"auto\")"
-                )),
-                None => warnings.push(
-                    "explicit Euler without damping has no stable step; energy will grow".into(),
-                ),
-                _ => {}
-            }
-            (n, false)
-        }
-        None => {
-            let Some(bound) = stable_dt else {
-                return Err(scene
-                    .error(
-                        "fabric",
-                        "damping_ratio",
-                        "explicit Euler has no stable substep without damping",
-                        "set fabric.damping_ratio above 0, or use integrator = \"symplectic\"",
-                    )
-                    .into());
-            };
-            let n = (frame_dt / (AUTO_DT_SAFETY * bound)).ceil().max(1.0);
-            if n > s.max_substeps_per_frame as f32 {
-                return Err(scene
-                    .error(
-                        "solver",
-                        "substeps",
-                        format!(
-                        "the fabric needs {n:.0} substeps per frame (stable step {bound:.2e} s), \
-                         above max_substeps_per_frame = {}",
-                        s.max_substeps_per_frame
+                    )),
+                    None => warnings.push(
+                        "explicit Euler without damping has no stable step; energy will grow"
+                            .into(),
                     ),
-                        match dt_limited_by {
-                            "wind drag" => {
-                                "lower wind.drag_coefficient (cloth: 1 to 2) or \
-                                            wind.air_density_kg_m3, or raise \
-                                            solver.max_substeps_per_frame"
-                            }
-                            _ => {
-                                "lower stretch_stiffness_n_m, coarsen the cloth, or raise \
-                                  solver.max_substeps_per_frame"
-                            }
-                        },
-                    )
-                    .into());
+                    _ => {}
+                }
+                (n, false)
             }
-            (n as u32, true)
-        }
-    };
+            None => {
+                let Some(bound) = stable_dt else {
+                    return Err(scene
+                        .error(
+                            "fabric",
+                            "damping_ratio",
+                            "explicit Euler has no stable substep without damping",
+                            "set fabric.damping_ratio above 0, or use integrator = \"symplectic\"",
+                        )
+                        .into());
+                };
+                let n = (frame_dt / (AUTO_DT_SAFETY * bound)).ceil().max(1.0);
+                if n > s.max_substeps_per_frame as f32 {
+                    return Err(scene
+                        .error(
+                            "solver",
+                            "substeps",
+                            format!(
+                            "the {} needs {n:.0} substeps per frame (stable step {bound:.2e} s, \
+                             frames of {frame_dt:.3e} s), above max_substeps_per_frame = {}",
+                            if dt_limited_by == "wind drag" { "wind's drag" } else { "fabric" },
+                            s.max_substeps_per_frame
+                        ),
+                            too_many_substeps_fix(scene, dt_limited_by, frame_dt),
+                        )
+                        .into());
+                }
+                (n as u32, true)
+            }
+        };
     for (i, c) in model.colliders.iter().enumerate() {
         let r = &c.body.repairs;
         if r.flipped_faces > 0 || r.turned_outside_out {
@@ -713,4 +706,25 @@ fn after_frame(
     }
     stats.settled = settle::check(prep, stats, frame);
     Ok(stats.settled.is_some())
+}
+
+/// What to change when `auto` would need more substeps than allowed: the term that binds, and
+/// the slips that make a step tiny or a frame long (a mesh in the wrong units, a low fps).
+fn too_many_substeps_fix(scene: &Scene, limited_by: &str, frame_dt: f32) -> String {
+    let mut fix = match limited_by {
+        "wind drag" => "lower wind.drag_coefficient (cloth: 1 to 2) or wind.air_density_kg_m3",
+        _ => "lower stretch_stiffness_n_m or coarsen the cloth",
+    }
+    .to_string();
+    if matches!(scene.cloth, crate::scene::ClothSource::Mesh { .. }) {
+        fix += "; check [cloth.mesh] units (a mesh read in the wrong unit has edges far too \
+                short)";
+    }
+    if frame_dt > 0.1 {
+        fix += &format!(
+            "; raise solver.fps (fps = {} makes each frame {frame_dt} s)",
+            scene.solver.fps
+        );
+    }
+    fix + "; or raise solver.max_substeps_per_frame"
 }
