@@ -4,7 +4,7 @@ use crate::model::layout::Membrane;
 use crate::model::{ClothModel, Spring};
 use crate::pattern::garment::SeamPair;
 use crate::solver::ParticleState;
-use glam::Vec4;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 /// Largest relative stretch (L − L0)/L0 over all springs.
@@ -192,6 +192,23 @@ pub fn mesh_warnings(model: &ClothModel, check_duplicates: bool) -> Vec<String> 
     if !check_duplicates {
         return warnings;
     }
+    // A pattern's size is checked against a garment's when it loads; a mesh or grid here.
+    let (lo, hi) = (model.positions.iter())
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        });
+    let span = (hi - lo).max_element();
+    if span.is_finite() && !(0.01..=10.0).contains(&span) {
+        warnings.push(format!(
+            "the cloth spans {span} m, {} any garment, curtain or test swatch (1 cm to 10 m): \
+             check its size, or a mesh's units ([cloth.mesh] units)",
+            if span > 10.0 {
+                "larger than"
+            } else {
+                "smaller than"
+            }
+        ));
+    }
     let mut keys: Vec<[u32; 3]> = (model.positions.iter())
         .map(|p| p.to_array().map(f32::to_bits))
         .collect();
@@ -248,5 +265,34 @@ mod quantile_tests {
         let max = edge_strain_quantile(&positions, &springs, 1.0);
         assert!((max - max_edge_strain(&positions, &springs)).abs() == 0.0);
         assert_eq!(edge_strain_quantile(&positions, &[], 0.99), 0.0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::{GridPlane, TriMesh};
+    use crate::scene::Fabric;
+
+    #[test]
+    fn a_cloth_larger_than_any_garment_or_smaller_than_a_swatch_is_warned() {
+        let fabric = Fabric {
+            density: 0.2,
+            stretch_stiffness: 100.0,
+            bending_stiffness: Some(1e-5),
+            damping_ratio: 0.05,
+            preset: None,
+            membrane: None,
+            buckling: false,
+        };
+        let spans = |side: f32| {
+            let mesh = TriMesh::grid(side, side, 4, 4, Vec3::ZERO, GridPlane::Xy);
+            let model = ClothModel::from_mesh(&mesh, &fabric, &[]);
+            let warned = mesh_warnings(&model, true);
+            warned.iter().any(|w| w.contains("the cloth spans"))
+        };
+        // A cm-modelled 40 cm strip read in metres is 40 m; one in mm read as m is 0.4 mm.
+        assert!(spans(40.0) && spans(0.004));
+        assert!(!spans(1.0) && !spans(0.02) && !spans(9.0));
     }
 }
