@@ -190,3 +190,19 @@ fn point_triangle_reference_conserves_momentum_and_keeps_the_layers_apart() {
         "layers came within {smallest} m"
     );
 }
+
+#[test]
+fn a_self_collision_thickness_of_many_edges_is_warned() {
+    // The fold's mean edge is 2.1 cm (the default thickness 0.75 of it); half a metre makes
+    // particles a few triangles apart repel, which the run should say before it blows up.
+    let warned = |thickness: Option<f32>| {
+        let mut scene = Scene::load(&fixture("scenes/self_fold.toml")).unwrap();
+        scene.self_collision.as_mut().unwrap().thickness = thickness;
+        let prep = prepare(&scene).unwrap();
+        prep.warnings
+            .iter()
+            .any(|w| w.contains("times the cloth's mean edge"))
+    };
+    assert!(warned(Some(0.5)));
+    assert!(!warned(None) && !warned(Some(0.02)));
+}

@@ -291,6 +291,14 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
         Some(sc) => {
             let mean_edge = model.springs.iter().map(|s| s.rest_length).sum::<f32>()
                 / model.springs.len().max(1) as f32;
+            if let Some(t) = sc.thickness.filter(|&t| t > 2.0 * mean_edge) {
+                warnings.push(format!(
+                    "self_collision.thickness_m = {t} m is {:.0} times the cloth's mean edge \
+                     ({mean_edge:.3e} m): particles a few triangles apart push each other away, \
+                     and the cloth inflates or blows up (the default is 0.75 times the edge)",
+                    t / mean_edge
+                ));
+            }
             (
                 sc.thickness.unwrap_or(0.75 * mean_edge),
                 sc.buckets.unwrap_or(
