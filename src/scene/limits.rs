@@ -293,73 +293,97 @@ fn check_wind(c: &Checker, scene: &Scene, frame: f64) -> Result<(), InputError> 
 /// Values that the solver can compute with but that no real scene has.
 pub fn warnings(scene: &Scene) -> Vec<String> {
     let mut out = Vec::new();
+    // As the fabric's warnings read: file, line and key, what is odd, and the fix.
+    let mut warn = |table: &str, key: &str, problem: String, fix: &str| {
+        let e = scene.error(table, key, problem, fix);
+        out.push(e.to_string().replace("\n  fix: ", " (fix: ") + ")");
+    };
     if let Some(w) = &scene.wind {
         if w.air_density > 5.0 {
-            out.push(format!(
-                "wind.air_density_kg_m3 = {} is denser than any air (1.2 kg/m³ at sea level)",
-                w.air_density
-            ));
+            warn(
+                "wind",
+                "air_density_kg_m3",
+                format!("{} kg/m³ is denser than any air", w.air_density),
+                "air at sea level is 1.2 kg/m³",
+            );
         }
         if w.drag_coefficient > 3.0 {
-            out.push(format!(
-                "wind.drag_coefficient = {} is above any cloth's or flat plate's (1 to 2)",
-                w.drag_coefficient
-            ));
+            warn(
+                "wind",
+                "drag_coefficient",
+                format!(
+                    "{} is above any cloth's or flat plate's",
+                    w.drag_coefficient
+                ),
+                "cloth and flat plates: 1 to 2",
+            );
         }
     }
     if scene.fabric.damping_ratio > 10.0 {
-        out.push(format!(
-            "fabric.damping_ratio = {} is ten times critical damping: the cloth will creep, \
-             not swing",
-            scene.fabric.damping_ratio
-        ));
+        warn(
+            "fabric",
+            "damping_ratio",
+            format!(
+                "{} is ten times critical damping: the cloth will creep, not swing",
+                scene.fabric.damping_ratio
+            ),
+            "fabrics damp at about 0.01 to 1",
+        );
     }
-    out.extend(world_warnings(scene));
-    for (i, b) in scene.bodies.iter().enumerate() {
-        if b.friction > 2.0 {
-            out.push(format!(
-                "{}.friction = {} is above any fabric's on skin or plastic (about 0.2 to 1)",
-                scene.body_table(i),
-                b.friction
-            ));
-        }
-    }
-    out
-}
-
-/// Gravity and air no room on Earth has, and phases that start after the run has ended.
-fn world_warnings(scene: &Scene) -> Vec<String> {
-    let mut out = Vec::new();
     let g = scene.gravity.length();
     if g > 3.0 * 9.81 {
-        out.push(format!(
-            "world.gravity_m_s2 is {g} m/s², {:.0} times Earth's 9.81 m/s²",
-            g / 9.81
-        ));
+        warn(
+            "world",
+            "gravity_m_s2",
+            format!("{g} m/s² is {:.0} times Earth's", g / 9.81),
+            "Earth's gravity is [0, -9.81, 0]",
+        );
     }
     if scene.air_damping > 100.0 {
-        out.push(format!(
-            "world.air_damping_per_s = {} stops any motion within {:.0} ms: the cloth will crawl \
-             instead of falling (still air is about 0.1 to 5 /s)",
-            scene.air_damping,
-            1e3 / scene.air_damping
-        ));
+        warn(
+            "world",
+            "air_damping_per_s",
+            format!(
+                "{} /s stops any motion within {:.0} ms: the cloth will crawl instead of falling",
+                scene.air_damping,
+                1e3 / scene.air_damping
+            ),
+            "still air is about 0.1 to 5 /s",
+        );
     }
     let run_s = scene.solver.frames as f64 / scene.solver.fps as f64;
     if g > 0.0 && scene.gravity_start as f64 >= run_s {
-        out.push(format!(
-            "world.gravity_start_s = {} s is at or after the run's end ({run_s:.3} s): gravity \
-             never comes on",
-            scene.gravity_start
-        ));
+        warn(
+            "world",
+            "gravity_start_s",
+            format!(
+                "{} s is at or after the run's end ({run_s:.3} s): gravity never comes on",
+                scene.gravity_start
+            ),
+            "start gravity within the run, or run more frames",
+        );
     }
     if let ClothSource::Pattern { sewing_time, .. } = &scene.cloth {
         if *sewing_time as f64 > run_s {
-            out.push(format!(
-                "cloth.pattern.seam_sewing_time_s = {} s is longer than the run ({run_s:.3} s): \
-                 the seams are still being drawn shut when it ends",
-                sewing_time
-            ));
+            warn(
+                "cloth.pattern",
+                "seam_sewing_time_s",
+                format!(
+                    "{sewing_time} s is longer than the run ({run_s:.3} s): the seams are still \
+                     being drawn shut when it ends"
+                ),
+                "sew within the run, or run more frames",
+            );
+        }
+    }
+    for (i, b) in scene.bodies.iter().enumerate() {
+        if b.friction > 2.0 {
+            warn(
+                &scene.body_table(i),
+                "friction",
+                format!("{} is above any fabric's on skin or plastic", b.friction),
+                "cloth on skin or plastic: about 0.2 to 1",
+            );
         }
     }
     out
@@ -385,6 +409,9 @@ mod tests {
         assert!(world_warned("gravity_m_s2 = [0.0, -9.81, 0.0]").is_empty());
         let strong = world_warned("gravity_m_s2 = [0.0, -1000.0, 0.0]");
         assert!(strong[0].contains("102 times Earth's"), "{strong:?}");
+        // Located and with a fix, as the fabric's warnings are.
+        assert!(strong[0].starts_with("scene.toml:"), "{strong:?}");
+        assert!(strong[0].contains("world.gravity_m_s2") && strong[0].contains("(fix: "));
         let thick = world_warned("air_damping_per_s = 1e4");
         assert!(thick[0].contains("the cloth will crawl"), "{thick:?}");
         // 24 frames at 24 fps: the run ends at 1 s.

@@ -156,136 +156,146 @@ pub(super) fn parse_solver(c: &Checker, s: &RawSolver) -> Result<SolverSettings,
             ))
         }
     };
-    Ok(SolverSettings {
-        fps: c.positive("solver", "fps", s.fps, "frames per second")?,
-        frames: c.count("solver", "frames", s.frames, 1)?,
-        substeps,
-        integrator,
-        iterations: match s.iterations {
-            Some(n) => Some(c.count("solver", "iterations", n, 1)?),
-            None => None,
-        },
-        tolerance: match s.tolerance {
-            None => None,
-            Some(_) if integrator != INTEGRATOR_IMPLICIT => {
-                return Err(c.err(
+    let settings =
+        SolverSettings {
+            fps: c.positive("solver", "fps", s.fps, "frames per second")?,
+            frames: c.count("solver", "frames", s.frames, 1)?,
+            substeps,
+            integrator,
+            iterations: match s.iterations {
+                Some(n) => Some(c.count("solver", "iterations", n, 1)?),
+                None => None,
+            },
+            tolerance: match s.tolerance {
+                None => None,
+                Some(_) if integrator != INTEGRATOR_IMPLICIT => return Err(c.err(
                     "solver",
                     "tolerance",
                     "a tolerance stops the implicit solve's sweeps; this scene's integrator has \
                      none",
                     "remove tolerance, or use integrator = \"implicit\"",
-                ))
-            }
-            Some(v) => Some(c.within(
-                "solver",
-                "tolerance",
-                v,
-                TOLERANCE_RANGE,
-                "(the RMS force residual |f|/(m·g) of the free particles: 0.01 = 1% of each \
+                )),
+                Some(v) => Some(c.within(
+                    "solver",
+                    "tolerance",
+                    v,
+                    TOLERANCE_RANGE,
+                    "(the RMS force residual |f|/(m·g) of the free particles: 0.01 = 1% of each \
                  particle's weight)",
-            )?),
-        },
-        multigrid: match s.multigrid {
-            Some(true) if integrator != INTEGRATOR_IMPLICIT => {
-                return Err(c.err(
+                )?),
+            },
+            multigrid: match s.multigrid {
+                Some(true) if integrator != INTEGRATOR_IMPLICIT => return Err(c.err(
                     "solver",
                     "multigrid",
                     "multigrid solves implicit Euler's equations; this scene's integrator has none",
                     "remove multigrid, or use integrator = \"implicit\"",
-                ))
-            }
-            other => other.unwrap_or(true),
-        },
-        smoothing_sweeps: match s.smoothing_sweeps {
-            None => DEFAULT_SMOOTHING_SWEEPS,
-            Some(v) => c.count("solver", "smoothing_sweeps", v, 1)?,
-        },
-        settle_speed: match (s.settle_speed_m_s, s.settle_ke_per_particle_j) {
-            (_, Some(_)) => {
-                return Err(c.err(
+                )),
+                other => other.unwrap_or(true),
+            },
+            smoothing_sweeps: match s.smoothing_sweeps {
+                None => DEFAULT_SMOOTHING_SWEEPS,
+                Some(v) => c.count("solver", "smoothing_sweeps", v, 1)?,
+            },
+            settle_speed: match (s.settle_speed_m_s, s.settle_ke_per_particle_j) {
+                (_, Some(_)) => return Err(c.err(
                     "solver",
                     "settle_ke_per_particle_j",
                     "the settle rule is now a speed: energy per particle meant a different \
                      speed at every particle spacing",
                     "write settle_speed_m_s = v, the RMS speed below which the cloth counts as \
                      at rest (1e-9 J per particle of mass m is v = √(2e-9 / m))",
-                ))
-            }
-            (None, None) => None,
-            (Some(v), None) => {
-                Some(c.within("solver", "settle_speed_m_s", v, (1e-6, 10.0), "m/s")?)
-            }
-        },
-        settle_force_residual: match s.settle_force_residual {
-            None => DEFAULT_SETTLE_FORCE_RESIDUAL,
-            Some(_) if integrator != INTEGRATOR_IMPLICIT => {
-                return Err(c.err(
+                )),
+                (None, None) => None,
+                (Some(v), None) => {
+                    Some(c.within("solver", "settle_speed_m_s", v, (1e-6, 10.0), "m/s")?)
+                }
+            },
+            settle_force_residual: match s.settle_force_residual {
+                None => DEFAULT_SETTLE_FORCE_RESIDUAL,
+                Some(_) if integrator != INTEGRATOR_IMPLICIT => {
+                    return Err(c.err(
+                        "solver",
+                        "settle_force_residual",
+                        "the force residual is what the implicit solve leaves unbalanced; this \
+                     scene's integrator solves no equations",
+                        "remove settle_force_residual, or use integrator = \"implicit\"",
+                    ))
+                }
+                Some(v) => c.within(
                     "solver",
                     "settle_force_residual",
-                    "the force residual is what the implicit solve leaves unbalanced; this \
-                     scene's integrator solves no equations",
-                    "remove settle_force_residual, or use integrator = \"implicit\"",
-                ))
-            }
-            Some(v) => c.within(
+                    v,
+                    (1e-6, 1e3),
+                    "(the RMS force residual |f|/(m·g): 0.05 = 5% of each particle's weight)",
+                )?,
+            },
+            max_substeps_per_frame: most,
+            // Below 10%, a garment's first frames would read as exploded; above 100 (10,000%),
+            // the guard never fires.
+            max_strain: c.within(
                 "solver",
-                "settle_force_residual",
-                v,
-                (1e-6, 1e3),
-                "(the RMS force residual |f|/(m·g): 0.05 = 5% of each particle's weight)",
+                "max_strain",
+                s.max_strain,
+                (0.1, 100.0),
+                "(a strain: 1 = 100%)",
             )?,
-        },
-        max_substeps_per_frame: most,
-        // Below 10%, a garment's first frames would read as exploded; above 100 (10,000%),
-        // the guard never fires.
-        max_strain: c.within(
+            max_memory_bytes: match s.max_memory_mb {
+                Some(mb) => Some(
+                    (c.positive("solver", "max_memory_mb", mb, "MiB")? as f64 * 1048576.0) as u64,
+                ),
+                None => None,
+            },
+            strain_limit: match s.strain_limit {
+                // The implicit solve holds the cloth at its physical strain; a cap would hide
+                // where it does not.
+                None if integrator == INTEGRATOR_IMPLICIT => None,
+                None | Some(RawStrainLimit::Switch(true)) => Some(DEFAULT_STRAIN_LIMIT),
+                Some(RawStrainLimit::Switch(false)) => None,
+                Some(RawStrainLimit::Limit(v)) => Some(c.within(
+                    "solver",
+                    "strain_limit",
+                    v,
+                    (1e-3, 10.0),
+                    "(as a fraction: 0.1 = 10%)",
+                )?),
+            },
+            max_energy_growth: c.within(
+                "solver",
+                "max_energy_growth",
+                s.max_energy_growth,
+                (1e-3, 1e6),
+                "(as a fraction: 0.5 = 50%)",
+            )?,
+            max_speed: c.within(
+                "solver",
+                "max_speed_m_s",
+                s.max_speed_m_s,
+                (0.1, 1e6),
+                "m/s",
+            )?,
+            strain_limit_iterations: c.count(
+                "solver",
+                "strain_limit_iterations",
+                s.strain_limit_iterations,
+                1,
+            )?,
+        };
+    // The cap holds every spring at or below strain_limit: an explosion guard below it would
+    // stop the first frame that reaches the cap.
+    if let Some(limit) = settings.strain_limit.filter(|&l| settings.max_strain <= l) {
+        return Err(c.err(
             "solver",
             "max_strain",
-            s.max_strain,
-            (0.1, 100.0),
-            "(a strain: 1 = 100%)",
-        )?,
-        max_memory_bytes: match s.max_memory_mb {
-            Some(mb) => {
-                Some((c.positive("solver", "max_memory_mb", mb, "MiB")? as f64 * 1048576.0) as u64)
-            }
-            None => None,
-        },
-        strain_limit: match s.strain_limit {
-            // The implicit solve holds the cloth at its physical strain; a cap would hide
-            // where it does not.
-            None if integrator == INTEGRATOR_IMPLICIT => None,
-            None | Some(RawStrainLimit::Switch(true)) => Some(DEFAULT_STRAIN_LIMIT),
-            Some(RawStrainLimit::Switch(false)) => None,
-            Some(RawStrainLimit::Limit(v)) => Some(c.within(
-                "solver",
-                "strain_limit",
-                v,
-                (1e-3, 10.0),
-                "(as a fraction: 0.1 = 10%)",
-            )?),
-        },
-        max_energy_growth: c.within(
-            "solver",
-            "max_energy_growth",
-            s.max_energy_growth,
-            (1e-3, 1e6),
-            "(as a fraction: 0.5 = 50%)",
-        )?,
-        max_speed: c.within(
-            "solver",
-            "max_speed_m_s",
-            s.max_speed_m_s,
-            (0.1, 1e6),
-            "m/s",
-        )?,
-        strain_limit_iterations: c.count(
-            "solver",
-            "strain_limit_iterations",
-            s.strain_limit_iterations,
-            1,
-        )?,
-    })
+            format!(
+                "{} is at or below strain_limit = {limit}: every frame the cap holds would read \
+                 as exploded",
+                settings.max_strain
+            ),
+            "give max_strain above strain_limit (default 5 = 500%)",
+        ));
+    }
+    Ok(settings)
 }
 
 /// Validates `[output]`; the folder defaults to `out/<scene file stem>`.
