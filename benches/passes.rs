@@ -340,15 +340,7 @@ fn model_build(c: &mut Criterion) {
     use drapekit::scene::Fabric;
     let mut group = c.benchmark_group("model_build");
     group.sample_size(10);
-    let fabric = Fabric {
-        density: 0.2,
-        stretch_stiffness: 500.0,
-        bending_stiffness: Some(1e-5),
-        damping_ratio: 0.05,
-        preset: None,
-        membrane: None,
-        buckling: false,
-    };
+    let fabric = Fabric::linear(500.0);
     for n in [256u32, 1024] {
         let origin = glam::Vec3::new(0.0, 1.0, 0.0);
         let mesh = TriMesh::grid(1.0, 1.0, n, n, origin, GridPlane::Xy);

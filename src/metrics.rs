@@ -276,15 +276,7 @@ mod tests {
 
     #[test]
     fn a_cloth_larger_than_any_garment_or_smaller_than_a_swatch_is_warned() {
-        let fabric = Fabric {
-            density: 0.2,
-            stretch_stiffness: 100.0,
-            bending_stiffness: Some(1e-5),
-            damping_ratio: 0.05,
-            preset: None,
-            membrane: None,
-            buckling: false,
-        };
+        let fabric = Fabric::linear(100.0);
         let spans = |side: f32| {
             let mesh = TriMesh::grid(side, side, 4, 4, Vec3::ZERO, GridPlane::Xy);
             let model = ClothModel::from_mesh(&mesh, &fabric, &[]);

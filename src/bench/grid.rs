@@ -23,15 +23,7 @@ use std::time::Instant;
 /// springs and bending (no wind), and its plan and parameters.
 pub fn bench_model(n: u32) -> (ClothModel, SimParams, PassPlan) {
     let mesh = TriMesh::grid(1.0, 1.0, n, n, Vec3::new(0.0, 1.0, 0.0), GridPlane::Xy);
-    let fabric = Fabric {
-        density: 0.2,
-        stretch_stiffness: 500.0,
-        bending_stiffness: Some(1e-5),
-        damping_ratio: 0.05,
-        preset: None,
-        membrane: None,
-        buckling: false,
-    };
+    let fabric = Fabric::linear(500.0);
     let model = ClothModel::from_mesh(&mesh, &fabric, &[(n - 1) * n, n * n - 1]);
     let plan = PassPlan::new(
         &model,

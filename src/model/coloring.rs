@@ -138,15 +138,7 @@ mod tests {
     #[test]
     fn no_element_joins_two_vertices_of_one_colour() {
         let mesh = TriMesh::grid(1.0, 1.0, 9, 7, Vec3::ZERO, GridPlane::Xy);
-        let fabric = Fabric {
-            density: 0.2,
-            stretch_stiffness: 100.0,
-            bending_stiffness: Some(1e-5),
-            damping_ratio: 0.05,
-            preset: None,
-            membrane: None,
-            buckling: false,
-        };
+        let fabric = Fabric::linear(100.0);
         let model = ClothModel::from_mesh(&mesh, &fabric, &[]);
         let coloring = model.vertex_coloring();
         let c = |v: u32| coloring.color_of[v as usize];

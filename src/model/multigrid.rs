@@ -307,15 +307,7 @@ mod tests {
 
     fn sheet(columns: u32) -> (ClothModel, Charted) {
         let mesh = TriMesh::grid(1.0, 1.0, columns, columns, Vec3::ZERO, GridPlane::Xy);
-        let fabric = Fabric {
-            density: 0.2,
-            stretch_stiffness: 100.0,
-            bending_stiffness: Some(1e-5),
-            damping_ratio: 0.05,
-            preset: None,
-            membrane: None,
-            buckling: false,
-        };
+        let fabric = Fabric::linear(100.0);
         let model = ClothModel::from_mesh(&mesh, &fabric, &[]);
         (model, Charted::grid(1.0, 1.0, columns, columns))
     }

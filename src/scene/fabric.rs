@@ -70,6 +70,20 @@ impl Orthotropic {
 pub const BUCKLED_FRACTION: f32 = 0.03;
 
 impl Fabric {
+    /// A plain woven-like sheet of `stretch_stiffness` N/m on linear springs: 0.2 kg/m², bending
+    /// 1e-5 N·m, 5% of critical damping, no preset. The benchmark cloth's fabric, and the tests'.
+    pub fn linear(stretch_stiffness: f32) -> Fabric {
+        Fabric {
+            density: 0.2,
+            stretch_stiffness,
+            bending_stiffness: Some(1e-5),
+            damping_ratio: 0.05,
+            preset: None,
+            membrane: None,
+            buckling: false,
+        }
+    }
+
     /// The cloth's law in compression as (`SimParams::euler_onset`,
     /// `SimParams::membrane_onset`, `SimParams::buckled_fraction`): with buckling, π²B/Y,
     /// (√3/4)·π²B (B = the hinge coefficient over `HINGE_PER_RIGIDITY`, 0 without bending) and
