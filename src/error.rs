@@ -148,6 +148,11 @@ impl InputError {
         self.line = line;
         self
     }
+
+    /// The text on one line, for a warning: "file:line: key: problem (fix: …)".
+    pub fn one_line(&self) -> String {
+        self.to_string().replace("\n  fix: ", " (fix: ") + ")"
+    }
 }
 
 impl fmt::Display for InputError {

@@ -120,7 +120,7 @@ pub fn input_warnings(scene: &Scene, bodies: &[Body]) -> Vec<String> {
         };
         if let Some((problem, fix)) = size_problem(largest_extent(&body.mesh.positions), *scale) {
             let e = scene.error(&scene.body_table(i), "units", problem, fix);
-            out.push(one_line(&e));
+            out.push(e.one_line());
         }
     }
     out
@@ -149,7 +149,7 @@ fn softening_warnings(scene: &Scene, m: &crate::scene::Orthotropic) -> Vec<Strin
                 "give {key} at least {} N/m, or tension = \"linear\"",
                 short(small as f64)
             );
-            one_line(&scene.error("fabric", key, problem, fix))
+            scene.error("fabric", key, problem, fix).one_line()
         })
         .collect()
 }
@@ -195,7 +195,7 @@ pub fn fabric_warnings(scene: &Scene, fabric: &Fabric) -> Vec<String> {
             range.source
         );
         let e = scene.error("fabric", range.key, problem, fix(&range, v));
-        out.push(one_line(&e));
+        out.push(e.one_line());
     }
     if let Some(m) = m {
         out.extend(softening_warnings(scene, &m));
@@ -211,7 +211,7 @@ pub fn fabric_warnings(scene: &Scene, fabric: &Fabric) -> Vec<String> {
             ),
             "give bending_stiffness_n_m (or a preset), or remove compression",
         );
-        out.push(one_line(&e));
+        out.push(e.one_line());
     }
     out
 }
@@ -251,11 +251,6 @@ fn fix(range: &MeasuredRange, v: f64) -> String {
         range.unit,
         short(example)
     )
-}
-
-/// An input error's text on one line, for a warning: "file:line: key: problem (fix: …)".
-fn one_line(e: &crate::InputError) -> String {
-    e.to_string().replace("\n  fix: ", " (fix: ") + ")"
 }
 
 /// A value in at most 3 significant digits: "220", "0.22", "4.05e3", "2e-5".

@@ -4,7 +4,7 @@
 //! gravity, and the wind's drag. A value outside its range is bad input naming the key to
 //! change; `warnings` lists values that compute but make no physical sense.
 
-use super::{ClothSource, Scene, INTEGRATOR_IMPLICIT};
+use super::{ClothSource, Scene, Wind, INTEGRATOR_IMPLICIT};
 use crate::check::Checker;
 use crate::error::InputError;
 
@@ -237,8 +237,12 @@ pub fn wind_drag_rate(scene: &Scene) -> f64 {
     let Some(w) = &scene.wind else {
         return 0.0;
     };
-    let speed = w.velocity.as_dvec3().length() * (1.0 + w.gust_amplitude as f64);
-    w.air_density as f64 * w.drag_coefficient as f64 * speed / scene.fabric.density as f64
+    w.air_density as f64 * w.drag_coefficient as f64 * gust_speed(w) / scene.fabric.density as f64
+}
+
+/// The wind's speed at its strongest gust, in m/s.
+fn gust_speed(w: &Wind) -> f64 {
+    w.velocity.as_dvec3().length() * (1.0 + w.gust_amplitude as f64)
 }
 
 /// Wind drag relaxes the cloth's speed toward the wind's at the rate γ = ρ·C_d·|v|/σ (the
@@ -248,7 +252,7 @@ fn check_wind(c: &Checker, scene: &Scene, frame: f64) -> Result<(), InputError> 
     let Some(w) = &scene.wind else {
         return Ok(());
     };
-    let speed = w.velocity.as_dvec3().length() * (1.0 + w.gust_amplitude as f64);
+    let speed = gust_speed(w);
     if speed != 0.0 {
         let fix = "give the wind in m/s (a gale is about 20 m/s)";
         safe(
@@ -295,8 +299,7 @@ pub fn warnings(scene: &Scene) -> Vec<String> {
     let mut out = Vec::new();
     // As the fabric's warnings read: file, line and key, what is odd, and the fix.
     let mut warn = |table: &str, key: &str, problem: String, fix: &str| {
-        let e = scene.error(table, key, problem, fix);
-        out.push(e.to_string().replace("\n  fix: ", " (fix: ") + ")");
+        out.push(scene.error(table, key, problem, fix).one_line());
     };
     if let Some(w) = &scene.wind {
         if w.air_density > 5.0 {
