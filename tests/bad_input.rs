@@ -254,6 +254,42 @@ fn a_unit_slip_is_warned_before_the_garment_is_meshed() {
 }
 
 #[test]
+fn a_spacing_too_coarse_for_the_garment_is_warned_with_one_that_keeps_its_cut() {
+    // The T-shirt's panels span 1.1 m as the pattern places them: at 0.5 m, 2.2 spacings, a
+    // few dozen particles. The warning names the scene's line and key, and the spacing with
+    // ten across (0.11 m); the shipped 2 cm is not warned.
+    let work = std::env::temp_dir().join(format!("drapekit-coarse-{}", std::process::id()));
+    std::fs::create_dir_all(&work).unwrap();
+    let pattern = common::fixture("patterns/tshirt.json");
+    let plan = |spacing: &str| {
+        let scene = format!(
+            "[cloth.pattern]\npath = {:?}\nparticle_distance_m = {spacing}\n[fabric]\n\
+             preset = \"cotton\"\n[solver]\nframes = 1\n",
+            pattern.to_str().unwrap()
+        );
+        std::fs::write(work.join("s.toml"), scene).unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
+            .args(["plan", work.join("s.toml").to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0));
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let coarse = plan("0.5");
+    assert!(
+        coarse.contains("s.toml:3: cloth.pattern.particle_distance_m: 0.500 m is 2.2 spacings"),
+        "{coarse}"
+    );
+    assert!(
+        coarse.contains("fix: use particle_distance_m = 0.110 or less"),
+        "{coarse}"
+    );
+    let shipped = plan("0.02");
+    assert!(!shipped.contains("spacings across"), "{shipped}");
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+#[test]
 fn a_long_crossing_outline_is_found_in_seconds() {
     // A thin panel 75 m long that folds over itself at the far end, meshed at 1 mm: 150,000
     // outline particles. Testing every pair of segments took seconds (and 726 s for a typo's

@@ -360,6 +360,11 @@ fn too_many(scene: &Scene, particles: u64, fits: u64, problem: String, or: &str)
 /// unit slip (a sock is about 20 cm, a gown about 2 m): 5 cm and 5 m.
 pub const GARMENT_SIZE_RANGE_M: (f64, f64) = (0.05, 5.0);
 
+/// The fewest particle spacings across a pattern's garment below which it is warned: a sock
+/// (20 cm) at the shipped 2 cm spacing is 10; a T-shirt at 0.5 m is under 3, a few dozen
+/// particles that keep nothing of its cut.
+pub const MIN_PARTICLES_ACROSS: f64 = 10.0;
+
 /// Each panel's farthest reach from the origin once placed, in m, and its placed bounding box:
 /// the box of its outline's curves (`Curve::bounds`) carried into 3D.
 fn panel_reach(pattern: &Pattern, options: &GarmentOptions) -> Vec<(f64, [DVec3; 2])> {
@@ -443,6 +448,21 @@ pub fn load_warnings(scene: &Scene) -> Vec<String> {
                     pattern.units_in_meter,
                     if size > large { "larger" } else { "smaller" }
                 ));
+            }
+            let across = size / options.particle_distance;
+            if size.is_finite() && across < MIN_PARTICLES_ACROSS {
+                let fix = format!(
+                    "use particle_distance_m = {:.3} or less ({MIN_PARTICLES_ACROSS} spacings \
+                     across; the shipped garments use 0.02)",
+                    size / MIN_PARTICLES_ACROSS
+                );
+                let problem = format!(
+                    "{:.3} m is {across:.1} spacings across a garment {size:.3} m wide: \
+                     too few particles to keep its cut",
+                    options.particle_distance
+                );
+                let e = scene.error("cloth.pattern", "particle_distance_m", problem, &fix);
+                out.push(e.one_line());
             }
         }
     }
