@@ -366,6 +366,18 @@ pub fn warnings(scene: &Scene) -> Vec<String> {
             "start gravity within the run, or run more frames",
         );
     }
+    if let Some(ratio) = seam_stiffness_ratio(scene).filter(|&r| r > MAX_SEAM_STIFFNESS_RATIO) {
+        warn(
+            "cloth.pattern",
+            "seam_stiffness_n_m",
+            format!(
+                "{ratio:.0} times the fabric's stretch stiffness: seams that stiff snap the \
+                 panels shut in a substep, and the run can explode"
+            ),
+            "leave it out (twice the fabric's stretch stiffness), or use at most \
+             100 times the fabric's",
+        );
+    }
     if let ClothSource::Pattern { sewing_time, .. } = &scene.cloth {
         if *sewing_time as f64 > run_s {
             warn(
@@ -390,6 +402,20 @@ pub fn warnings(scene: &Scene) -> Vec<String> {
         }
     }
     out
+}
+
+/// The seam stiffness past which, as a multiple of the fabric's stretch stiffness, a scene
+/// is warned: the default is 2; seams a hundred times stiffer than the cloth they join hold
+/// nothing better and pull the panels shut in a single substep.
+pub const MAX_SEAM_STIFFNESS_RATIO: f64 = 100.0;
+
+/// A pattern's seam stiffness as a multiple of its fabric's stiffest stretch stiffness
+/// (`None` for grids and meshes, which have no seams).
+pub fn seam_stiffness_ratio(scene: &Scene) -> Option<f64> {
+    let ClothSource::Pattern { seam_stiffness, .. } = &scene.cloth else {
+        return None;
+    };
+    Some(*seam_stiffness as f64 / scene.fabric.stiffest_stretch() as f64)
 }
 
 #[cfg(test)]

@@ -93,6 +93,9 @@ pub struct Prepared {
     pub max_energy_growth: f32,
     /// A frame with a particle faster than this has diverged, in m/s.
     pub max_speed: f32,
+    /// A pattern's seam stiffness as a multiple of its fabric's stretch stiffness (`None`
+    /// without seams): an explosion names it first when it is far above the default's 2.
+    pub seam_stiffness_ratio: Option<f64>,
     /// The bodies' parameters with their own friction slip speeds, from the first frame after
     /// every seam is closed (until then, `SEWING_SLIP_SPEED`); `None` when nothing switches.
     pub friction_slip_speed_sewn: Option<[BodyParams; MAX_BODIES]>,
@@ -343,6 +346,7 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
             }),
         max_energy_growth: s.max_energy_growth,
         max_speed: s.max_speed,
+        seam_stiffness_ratio: crate::scene::limits::seam_stiffness_ratio(scene),
         friction_slip_speed_sewn,
     })
 }
@@ -498,12 +502,20 @@ pub fn simulate_from(
         }
         let strain = health.max_strain;
         if strain > prep.max_strain {
-            let advice = if prep.colors.is_some() {
-                "the implicit solve did not hold the cloth together: use more substeps or \
-                 solver.iterations, or a longer seam_sewing_time_s"
-            } else {
-                "the substep is too large for the fabric's stiffness: use substeps = \"auto\", \
-                 more substeps, or integrator = \"implicit\""
+            let advice = match prep.seam_stiffness_ratio {
+                Some(r) if r > crate::scene::limits::MAX_SEAM_STIFFNESS_RATIO => format!(
+                    "the seams pulled the panels together at once: \
+                     cloth.pattern.seam_stiffness_n_m is {r:.0} times the fabric's stretch \
+                     stiffness; leave it out (twice the fabric's)"
+                ),
+                _ if prep.colors.is_some() => "the implicit solve did not hold the cloth \
+                                               together: use more substeps or \
+                                               solver.iterations, or a longer \
+                                               seam_sewing_time_s"
+                    .to_string(),
+                _ => "the substep is too large for the fabric's stiffness: use substeps = \
+                      \"auto\", more substeps, or integrator = \"implicit\""
+                    .to_string(),
             };
             return Err(Error::Unstable(format!(
                 "frame {frame} ({substeps}): a spring at {} is stretched by {:.0}%, past \
