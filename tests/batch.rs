@@ -352,6 +352,55 @@ fn markers_decide_what_a_rerun_skips_and_redoes() {
 }
 
 #[test]
+fn a_folder_or_file_of_the_user_s_with_an_item_s_name_is_never_replaced() {
+    let dir = workdir("foreign");
+    write_scene(&dir, "sheet.toml", 2);
+    let manifest = write_manifest(&dir, 3);
+    let out = dir.join("out");
+    // item-00: a folder of the user's; item-01: a file; item-02: an empty folder (nothing to
+    // lose), which the item takes.
+    std::fs::create_dir_all(out.join("item-00/sub")).unwrap();
+    std::fs::write(out.join("item-00/sub/notes.txt"), "mine").unwrap();
+    std::fs::write(out.join("item-01"), "mine too").unwrap();
+    std::fs::create_dir_all(out.join("item-02")).unwrap();
+    let r = batch(&[
+        manifest.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--backend",
+        "cpu",
+    ]);
+    let log = text(&r);
+    assert_eq!(r.status.code(), Some(4), "{log}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("item-00/sub/notes.txt")).unwrap(),
+        "mine"
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("item-01")).unwrap(),
+        "mine too"
+    );
+    assert!(out.join("item-02/done").is_file(), "{log}");
+    assert!(
+        log.contains("not a batch item's (it has no item.json)"),
+        "{log}"
+    );
+    assert!(log.contains("a file, not a batch item's folder"), "{log}");
+    // Nothing of the refused items was left aside either.
+    let hidden = std::fs::read_dir(&out)
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .file_name()
+                .to_string_lossy()
+                .starts_with('.')
+        })
+        .count();
+    assert_eq!(hidden, 0);
+}
+
+#[test]
 fn a_failing_item_fails_alone_and_is_reported_by_cause() {
     let dir = workdir("failures");
     write_scene(&dir, "sheet.toml", 4);

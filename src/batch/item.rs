@@ -68,7 +68,8 @@ pub struct Failure {
 }
 
 impl Failure {
-    fn from_error(e: &Error) -> Failure {
+    /// The failure `e` is, by its kind.
+    pub fn from_error(e: &Error) -> Failure {
         let kind = match e {
             Error::Input(_) => "bad_input",
             Error::Unstable(_) => "unstable",
@@ -130,6 +131,7 @@ pub fn run(item: &Item, out: &Path, opts: &ItemOptions) -> Result<Outcome, Error
         let failed = (m.status != "ok").then(|| read_failure(&dest));
         return Ok(Outcome::Skipped(failed));
     }
+    refuse_foreign(&dest)?;
     remove_leftovers(out, &item.id);
     let tmp = out.join(hidden_name(PARTIAL, &item.id));
     let started = std::time::Instant::now();
@@ -186,6 +188,34 @@ pub fn run(item: &Item, out: &Path, opts: &ItemOptions) -> Result<Outcome, Error
         None => Outcome::Done { seconds },
         Some(f) => Outcome::Failed(f),
     })
+}
+
+/// Refuses to replace `dest` unless it is absent, an empty folder, or an item's folder (it
+/// holds `item.json` or the `done` marker): a file or folder of the user's that happens to
+/// bear the item's name is never moved or deleted.
+fn refuse_foreign(dest: &Path) -> Result<(), Error> {
+    let Ok(meta) = std::fs::symlink_metadata(dest) else {
+        return Ok(());
+    };
+    let is_item = |dir: &Path| {
+        dir.join(ITEM_JSON).is_file()
+            || dir.join(DONE).is_file()
+            || std::fs::read_dir(dir).is_ok_and(|mut e| e.next().is_none())
+    };
+    if meta.is_dir() && is_item(dest) {
+        return Ok(());
+    }
+    let what = if meta.is_dir() {
+        "a folder that is not a batch item's (it has no item.json)"
+    } else {
+        "a file, not a batch item's folder"
+    };
+    Err(Error::Input(crate::error::InputError::new(
+        dest,
+        "--out",
+        format!("is {what}: the item's results would replace it"),
+        "move or rename it, or give batch another output folder with --out DIR",
+    )))
 }
 
 /// One attempt: the scene into `tmp`. A panic is this item's failure, not the batch's.

@@ -127,12 +127,9 @@ pub fn run(
                 let k = next.fetch_add(1, Ordering::Relaxed);
                 let Some(item) = mine.get(k) else { break };
                 let outcome = item::run(item, &opts.out, &opts.item).unwrap_or_else(|e| {
-                    // The item's folder could not be written: still only this item's failure.
-                    Outcome::Failed(item::Failure {
-                        kind: "io".into(),
-                        exit_code: e.exit_code(),
-                        message: e.to_string(),
-                    })
+                    // The item's folder could not be written, or is not the batch's to
+                    // replace: still only this item's failure.
+                    Outcome::Failed(item::Failure::from_error(&e))
                 });
                 log(&format!(
                     "[{}/{}] {}: {}",
