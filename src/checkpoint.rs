@@ -2,8 +2,9 @@
 //! atomically, `checkpoint.bin` in the output folder. The layout: a magic line, the length of a
 //! JSON header (u64, little endian), the header, then f32 little-endian arrays: positions and
 //! velocities (4 per particle each), and the frames the point cache and glTF export keep
-//! (3 per particle per kept frame). The solver's other arrays are rebuilt every substep, so
-//! the state and the run's statistics are all there is to save.
+//! (3 per particle per kept frame), and a SHA-256 of all that, so that a damaged file is refused
+//! rather than resumed from. The solver's other arrays are rebuilt every substep, so the state
+//! and the run's statistics are all there is to save.
 
 use crate::atomic_file::write_atomic;
 use crate::error::{Error, InputError};
@@ -11,11 +12,16 @@ use crate::sim::RunStats;
 use crate::solver::ParticleState;
 use glam::{Vec3, Vec4};
 use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
 use std::path::{Path, PathBuf};
 
 /// The checkpoint's file name inside the output folder.
 pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
-const MAGIC: &[u8] = b"DRAPEKIT CHECKPOINT 1\n";
+const MAGIC: &[u8] = b"DRAPEKIT CHECKPOINT 2\n";
+/// The first layout, without the checksum; still read.
+const MAGIC_V1: &[u8] = b"DRAPEKIT CHECKPOINT 1\n";
+/// Bytes of the SHA-256 that ends the file, over everything before it.
+const CHECKSUM_LEN: usize = 32;
 
 /// The JSON header: the run's inputs (to refuse a resume after they changed) and its progress.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -75,6 +81,8 @@ impl Checkpoint {
         for f in floats {
             bytes.extend_from_slice(&f.to_le_bytes());
         }
+        let checksum = Sha256::digest(&bytes);
+        bytes.extend_from_slice(&checksum);
         write_atomic(&dir.join(CHECKPOINT_FILE), &bytes)
     }
 
@@ -98,9 +106,19 @@ impl Checkpoint {
                 "the file is damaged or not a drapekit checkpoint: rerun the scene",
             ))
         };
-        let rest = bytes
-            .strip_prefix(MAGIC)
-            .ok_or_else(|| bad("it does not start with the checkpoint magic line"))?;
+        let rest = match (bytes.strip_prefix(MAGIC), bytes.strip_prefix(MAGIC_V1)) {
+            (Some(rest), _) => {
+                let body = (bytes.len().checked_sub(CHECKSUM_LEN))
+                    .filter(|&end| end >= MAGIC.len())
+                    .ok_or_else(|| bad("it ends inside its checksum"))?;
+                if Sha256::digest(&bytes[..body]).as_slice() != &bytes[body..] {
+                    return Err(bad("its checksum does not match its contents"));
+                }
+                &rest[..rest.len() - CHECKSUM_LEN]
+            }
+            (None, Some(rest)) => rest,
+            (None, None) => return Err(bad("it does not start with the checkpoint magic line")),
+        };
         let len = rest
             .get(..8)
             .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")) as usize)

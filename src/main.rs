@@ -626,8 +626,8 @@ fn strict_check(strict: bool, summary: &drapekit::output::Summary) -> Result<(),
     Ok(())
 }
 
-/// Ctrl-C finishes the current frame, writes a checkpoint and exits with 130; a second Ctrl-C
-/// exits at once.
+/// Ctrl-C, or SIGTERM (what schedulers and `timeout` send before they kill), finishes the
+/// current frame, writes a checkpoint and exits with 130; a second one exits at once.
 fn stop_on_ctrl_c() {
     let installed = ctrlc::set_handler(|| {
         if drapekit::run::INTERRUPTED.swap(true, std::sync::atomic::Ordering::SeqCst) {

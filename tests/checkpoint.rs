@@ -93,16 +93,17 @@ fn a_resumed_run_repeats_the_uninterrupted_one_bit_for_bit() {
 }
 
 #[cfg(unix)]
-#[test]
-fn ctrl_c_stops_after_the_frame_with_a_checkpoint_that_resumes() {
+/// Runs the hanging cloth for far more frames than the test waits for, sends `signal` once
+/// frame 2 is written (so it always arrives mid-run), and returns the run's folder, exit code
+/// and stderr.
+fn interrupted_run(signal: &str, name: &str) -> (PathBuf, Option<i32>, String) {
     let scene = common::fixture("scenes/hanging_cloth.toml");
-    let scene = scene.to_str().unwrap();
-    let out = out_dir("ctrl-c");
+    let out = out_dir(name);
     // Far more frames than the test waits for: the signal always arrives mid-run.
     let child = Command::new(env!("CARGO_BIN_EXE_drapekit"))
         .args([
             "run",
-            scene,
+            scene.to_str().unwrap(),
             "--backend",
             "cpu",
             "--quiet",
@@ -119,13 +120,30 @@ fn ctrl_c_stops_after_the_frame_with_a_checkpoint_that_resumes() {
         std::thread::sleep(std::time::Duration::from_millis(10));
     }
     let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args([signal, &child.id().to_string()])
         .status()
         .unwrap();
     assert!(kill.success());
     let r = child.wait_with_output().unwrap();
-    let stderr = String::from_utf8_lossy(&r.stderr);
-    assert_eq!(r.status.code(), Some(130), "{stderr}");
+    let stderr = String::from_utf8_lossy(&r.stderr).into_owned();
+    (out, r.status.code(), stderr)
+}
+
+#[test]
+fn sigterm_stops_like_ctrl_c_with_a_checkpoint() {
+    // What `timeout`, batch schedulers and container runtimes send before they kill.
+    let (out, code, stderr) = interrupted_run("-TERM", "sigterm");
+    assert_eq!(code, Some(130), "{stderr}");
+    assert!(stderr.contains("drapekit resume"), "{stderr}");
+    assert!(out.join("checkpoint.bin").exists());
+}
+
+#[test]
+fn ctrl_c_stops_after_the_frame_with_a_checkpoint_that_resumes() {
+    let scene = common::fixture("scenes/hanging_cloth.toml");
+    let scene = scene.to_str().unwrap();
+    let (out, code, stderr) = interrupted_run("-INT", "ctrl-c");
+    assert_eq!(code, Some(130), "{stderr}");
     assert!(stderr.contains("drapekit resume"), "{stderr}");
     let done = summary(&out)["frames"].as_u64().unwrap() as u32;
     assert!(summary(&out)["error"]
@@ -214,6 +232,16 @@ fn a_changed_scene_or_a_damaged_checkpoint_is_refused() {
         // A position that is not a number: a run never checkpoints one.
         (header.clone(), with_nan(&arrays), "not a finite number"),
     ];
+    // One bit flipped in the first particle's position: a file that parses, with a state the
+    // run never had. The checksum refuses it.
+    let mut flipped = bytes.clone();
+    let first_float = bytes.len() - 32 - arrays.len();
+    flipped[first_float] ^= 1;
+    std::fs::write(&ckpt, &flipped).unwrap();
+    let r = drapekit(&["resume", out.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("checksum does not match"), "{stderr}");
     for (header, arrays, expected) in damaged {
         std::fs::write(&ckpt, join_checkpoint(&header, &arrays)).unwrap();
         let r = drapekit(&["resume", out.to_str().unwrap()]);
@@ -225,26 +253,71 @@ fn a_changed_scene_or_a_damaged_checkpoint_is_refused() {
     }
 }
 
+#[test]
+fn resume_refuses_frames_it_already_has_and_runs_from_the_checkpoint_s_scene_when_the_file_is_gone()
+{
+    let dir = out_dir("gone");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("scene.toml");
+    let text = std::fs::read_to_string(common::fixture("scenes/hanging_cloth.toml")).unwrap();
+    std::fs::write(&scene, &text).unwrap();
+    let out = dir.join("out");
+    let args = ["--backend", "cpu", "--quiet", "--checkpoint-every", "1"];
+    let r = drapekit(
+        &[
+            &["run", scene.to_str().unwrap()][..],
+            &args[..],
+            &["--frames", "3", "--out", out.to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    // Frames 1–3 are done: --frames 2 has nothing to continue, and would leave frame 3
+    // beside a two-frame summary.
+    let r = drapekit(&["resume", out.to_str().unwrap(), "--frames", "2"]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("give --frames 4 or more"), "{stderr}");
+    // The scene file deleted: the checkpoint's copy continues the run.
+    std::fs::remove_file(&scene).unwrap();
+    let r = drapekit(&["resume", out.to_str().unwrap(), "--frames", "4"]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("is gone; resuming with the scene"),
+        "{stderr}"
+    );
+    assert_eq!(summary(&out)["frames"], 4);
+}
+
 /// A checkpoint file's magic line, then its header's length (8 bytes, little-endian), header
-/// (JSON) and arrays: the header and the arrays.
+/// (JSON), arrays and the SHA-256 of all that (32 bytes): the header and the arrays.
 fn split_checkpoint(bytes: &[u8]) -> (serde_json::Value, Vec<u8>) {
-    let magic = bytes.iter().position(|&b| b == b'\n').unwrap() + 1;
+    assert!(bytes.starts_with(MAGIC));
+    let magic = MAGIC.len();
     let len = u64::from_le_bytes(bytes[magic..magic + 8].try_into().unwrap()) as usize;
     let header = &bytes[magic + 8..magic + 8 + len];
     (
         serde_json::from_slice(header).unwrap(),
-        bytes[magic + 8 + len..].to_vec(),
+        bytes[magic + 8 + len..bytes.len() - 32].to_vec(),
     )
 }
 
+/// The checkpoint of `header` and `arrays`, its checksum theirs: what is wrong with it is
+/// for the checks after the checksum to find.
 fn join_checkpoint(header: &serde_json::Value, arrays: &[u8]) -> Vec<u8> {
+    use sha2::Digest;
     let json = serde_json::to_vec(header).unwrap();
-    let mut out = b"DRAPEKIT CHECKPOINT 1\n".to_vec();
+    let mut out = MAGIC.to_vec();
     out.extend_from_slice(&(json.len() as u64).to_le_bytes());
     out.extend_from_slice(&json);
     out.extend_from_slice(arrays);
+    let checksum = sha2::Sha256::digest(&out);
+    out.extend_from_slice(&checksum);
     out
 }
+
+const MAGIC: &[u8] = b"DRAPEKIT CHECKPOINT 2\n";
 
 fn with_header(
     header: &serde_json::Value,

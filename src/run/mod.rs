@@ -188,7 +188,32 @@ pub fn resume_run(
 ) -> Result<Summary, Error> {
     let checkpoint = Checkpoint::read(dir)?;
     let h = &checkpoint.header;
-    let scene = Scene::load(&h.scene_path)?;
+    if let Some(f) = frames.filter(|&f| f <= h.frame) {
+        return Err(Error::Input(crate::error::InputError::new(
+            &dir.join(crate::checkpoint::CHECKPOINT_FILE),
+            "--frames",
+            format!(
+                "{f} frames end at or before the checkpoint's frame {}: there is nothing to \
+                 continue, and its later frames would stay beside a shorter run's summary",
+                h.frame
+            ),
+            format!(
+                "give --frames {} or more, or rerun the scene with drapekit run --frames {f}",
+                h.frame + 1
+            ),
+        )));
+    }
+    // A scene file moved or deleted since: its text is in the checkpoint, and its relative
+    // paths resolve from where it stood.
+    let scene = if h.scene_path.exists() {
+        Scene::load(&h.scene_path)?
+    } else {
+        eprintln!(
+            "drapekit: {} is gone; resuming with the scene as the checkpoint keeps it",
+            h.scene_path.display()
+        );
+        Scene::parse(&h.scene_text, &h.scene_path)?
+    };
     if scene.source != h.scene_text {
         return Err(Error::Input(crate::error::InputError::new(
             &h.scene_path,
