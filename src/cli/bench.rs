@@ -20,10 +20,10 @@ pub struct BenchCli {
     #[arg(long, value_delimiter = ',', default_value = "64,128,256", value_parser = grid_size())]
     sizes: Vec<u32>,
     /// Substeps per timed batch (one submission on the GPU).
-    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=MAX_SUBSTEPS as i64))]
     substeps: u32,
     /// Timed batches per size and backend; the median is reported.
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=MAX_REPEATS as i64))]
     repeats: u32,
     /// Output folder for bench.csv and bench.md.
     #[arg(long, default_value = "out/bench")]
@@ -36,7 +36,7 @@ pub struct BenchCli {
     #[arg(long)]
     scene: Option<PathBuf>,
     /// With --scene: output frames per point (default: the scene's).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAMES as i64))]
     frames: Option<u32>,
 }
 
@@ -48,6 +48,16 @@ fn grid_size() -> clap::builder::RangedI64ValueParser<u32> {
 
 /// The grid sides `grid_size` takes.
 const GRID_SIDES: std::ops::RangeInclusive<u32> = 2..=4096;
+
+/// The most substeps (or sweeps) a benchmark option may ask for at once: each substep's
+/// parameters are made ahead, and 10⁸ of them asked for 11 TB and aborted.
+const MAX_SUBSTEPS: u32 = 100_000;
+/// The most frames a benchmark point may run.
+const MAX_FRAMES: u32 = 1_000_000;
+/// The most repeats or samples of a timing (each is kept for the median).
+const MAX_REPEATS: u32 = 1_000;
+/// The most Newton steps or sweeps per substep.
+const MAX_ITERATIONS: u32 = 10_000;
 
 /// `grid_size`, or 0 for no grid (`bench profile` of a scene alone).
 fn grid_size_or_none(text: &str) -> Result<u32, String> {
@@ -119,13 +129,13 @@ struct ProfileArgs {
     #[arg(long, value_delimiter = ',', default_value = "128,256,512,1024", value_parser = grid_size_or_none)]
     sizes: Vec<u32>,
     /// Substeps profiled per size (and timed without timestamps beside them).
-    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=MAX_SUBSTEPS as i64))]
     substeps: u32,
     /// Also profile this scene on the GPU, with its own integrator and step.
     #[arg(long)]
     scene: Option<PathBuf>,
     /// With --scene: frames run unprofiled, then again profiled.
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAMES as i64))]
     frames: u32,
     /// auto (honours WGPU_ADAPTER_NAME), fallback (software), or part of an adapter name.
     #[arg(long, default_value = "auto")]
@@ -151,13 +161,13 @@ struct ConvergenceArgs {
     #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=8))]
     refinements: Vec<u32>,
     /// The most plain sweeps (default 1024; 64 with --quick).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SUBSTEPS as i64))]
     max_sweeps: Option<u32>,
     /// Frames a finer mesh runs from the carried state before its measured substep.
     #[arg(long, default_value_t = 2)]
     relax_frames: u32,
     /// The most Newton steps (default 12; 3 with --quick).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_ITERATIONS as i64))]
     max_newton: Option<u32>,
     /// Conjugate-gradient iterations in each measured multigrid Newton step (the run before the
     /// measured substep solves as the scene does). Up to 1024: a Newton step of more than a
@@ -194,13 +204,13 @@ struct CollisionArgs {
     #[arg(long)]
     quick: bool,
     /// Frames sampled over the body's motion (default 4; 1 with --quick).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_REPEATS as i64))]
     samples: Option<u32>,
     /// Whole substeps timed per sample and strategy (default 50; 10 with --quick).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SUBSTEPS as i64))]
     window: Option<u32>,
     /// Timed collision stages per sample and strategy (default 5; 2 with --quick).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_REPEATS as i64))]
     repeats: Option<u32>,
     /// The GPU strategy's adapter: auto (honours WGPU_ADAPTER_NAME), fallback (software), or
     /// part of an adapter name.
@@ -229,11 +239,11 @@ struct FabricArgs {
     #[arg(long, default_value = "symplectic", value_parser = ["symplectic", "implicit"])]
     integrator: String,
     /// Substeps per frame (default: the stability estimate for symplectic, 4 for implicit).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SUBSTEPS as i64))]
     substeps: Option<u32>,
     /// Implicit iterations per substep: Newton steps where the specimen has coarse levels,
     /// sweeps where it has none (default: the scene's default, 1 Newton step or 10 sweeps).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_ITERATIONS as i64))]
     iterations: Option<u32>,
     /// Implicit only: end a step's solve once its RMS force residual is at most this fraction
     /// of the weight (0.01 = 1%), with --iterations the most Newton steps (default 8 with a
@@ -241,7 +251,7 @@ struct FabricArgs {
     #[arg(long, value_parser = fraction_of_weight)]
     tolerance: Option<f32>,
     /// The most frames a specimen may take to settle (default 480; 96 with --quick).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAMES as i64))]
     max_frames: Option<u32>,
     /// The fabric model: isotropic edge springs, or the orthotropic membrane (the preset's
     /// warp, weft and shear; cantilevers cut along the warp, the weft and the bias).
@@ -330,12 +340,12 @@ struct AccuracyArgs {
     #[arg(long)]
     quick: bool,
     /// Output frames per point (default: the scene's; every point runs them all).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAMES as i64))]
     frames: Option<u32>,
     /// The most substeps per frame a point may take; points whose stability bound asks for
     /// more are reported as failed with the count they need (default: the scene's
     /// max_substeps_per_frame; with --quick at most 2000).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SUBSTEPS as i64))]
     max_substeps: Option<u32>,
     /// auto: a hardware GPU if there is one, else the CPU; cpu; gpu.
     #[arg(long, default_value = "auto")]
@@ -377,7 +387,7 @@ struct PeerArgs {
     newton_sizes: Vec<u32>,
     /// Timed frames per point (default 60, one simulated second as in Warp's benchmark;
     /// 6 with --quick).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAMES as i64))]
     frames: Option<u32>,
     /// A short run: 6 frames per point.
     #[arg(long)]
@@ -386,10 +396,10 @@ struct PeerArgs {
     #[arg(long, value_delimiter = ',', default_value = "drapekit,warp,newton")]
     systems: Vec<drapekit::bench::peer::System>,
     /// Substeps per frame of the implicit points (Newton's VBD, drapekit's implicit Euler).
-    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..=MAX_SUBSTEPS as i64))]
     implicit_substeps: u32,
     /// Sweeps per implicit substep.
-    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..=MAX_ITERATIONS as i64))]
     iterations: u32,
     /// Output folder for peer.csv and peer.md.
     #[arg(long, default_value = "out/peer")]

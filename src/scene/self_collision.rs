@@ -29,7 +29,7 @@ pub(super) fn parse(
                     None => None,
                 },
                 buckets: match sc.hash_buckets {
-                    Some(b) => Some(c.count("self_collision", "hash_buckets", b, 64)?),
+                    Some(b) => Some(buckets(c, b)?),
                     None => None,
                 },
                 cpu_point_triangle: match sc.cpu_method.as_str() {
@@ -46,4 +46,25 @@ pub(super) fn parse(
         }
         None => None,
     })
+}
+
+/// The most hash buckets a scene may ask for: 2²⁴, eight times the default for two million
+/// particles. Each bucket is two u32 counters on both paths, cleared every substep, so 2³⁰
+/// took 12 GB and minutes for a cloth of 1,600 particles.
+pub const MAX_HASH_BUCKETS: i64 = 1 << 24;
+
+/// `hash_buckets`, at least 64 and at most `MAX_HASH_BUCKETS`.
+fn buckets(c: &Checker, b: i64) -> Result<u32, InputError> {
+    if b > MAX_HASH_BUCKETS {
+        return Err(c.err(
+            "self_collision",
+            "hash_buckets",
+            format!(
+                "{b} buckets is more than {MAX_HASH_BUCKETS}, which is more than any cloth needs"
+            ),
+            "leave it out (a power of two at least twice the particle count), or give at most \
+             16777216",
+        ));
+    }
+    c.count("self_collision", "hash_buckets", b, 64)
 }
