@@ -250,6 +250,13 @@ fn a_unit_slip_is_warned_before_the_garment_is_meshed() {
     assert!(stderr.contains("larger than any garment"), "{stderr}");
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.find("max_memory_mb").unwrap() > warning, "{stderr}");
+    // The refusal's fix names the unit before a coarser spacing, which would mesh millions of
+    // particles of a garment 60 m across.
+    let fix = stderr.rfind("fix: ").expect("a fix");
+    assert!(
+        stderr[fix..].starts_with("fix: first check units_in_meter in"),
+        "{stderr}"
+    );
     let _ = std::fs::remove_dir_all(&work);
 }
 
@@ -323,6 +330,47 @@ fn seams_far_stiffer_than_the_fabric_are_warned_and_named_when_the_run_explodes(
     let stopped = stderr.find("simulation stopped").expect("the run stops");
     assert!(
         stderr[stopped..].contains("the seams pulled the panels together at once"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+#[test]
+fn a_wind_past_any_storm_is_warned_and_blamed_when_the_cloth_flies_apart() {
+    // 500 m/s with 30% gusts on a flag pinned at one edge: the drag sets the substep (auto),
+    // and the cloth is flung past 100 m/s within a few frames. The advice names the wind, not
+    // the substep the drag already chose.
+    let work = std::env::temp_dir().join(format!("drapekit-gale-{}", std::process::id()));
+    std::fs::create_dir_all(&work).unwrap();
+    std::fs::write(
+        work.join("s.toml"),
+        "[cloth.grid]\nwidth_m = 1.5\nheight_m = 1.0\ncolumns = 36\nrows = 24\n\
+         center_m = [0.75, 2.0, 0.0]\nplane = \"xy\"\n[fabric]\ndensity_kg_m2 = 0.12\n\
+         stretch_stiffness_n_m = 400.0\nbending_stiffness_n_m = 1e-5\ndamping_ratio = 0.1\n\
+         [[pins]]\nedge = \"left\"\n[wind]\nvelocity_m_s = [500.0, 0.0, 0.0]\n\
+         gust_amplitude = 0.3\n[solver]\nframes = 6\nsubsteps = \"auto\"\n\
+         integrator = \"symplectic\"\n[output]\nobj = false\n",
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .args([
+            "run",
+            work.join("s.toml").to_str().unwrap(),
+            "--backend",
+            "cpu",
+        ])
+        .args(["--out", work.join("out").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("s.toml:16: wind.velocity_m_s: its gusts reach 650 m/s"),
+        "{stderr}"
+    );
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    let stopped = stderr.find("simulation stopped").expect("the run stops");
+    assert!(
+        stderr[stopped..].contains("chosen for the wind's drag, the wind tore the cloth"),
         "{stderr}"
     );
     let _ = std::fs::remove_dir_all(&work);

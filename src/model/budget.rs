@@ -338,15 +338,21 @@ fn too_many(scene: &Scene, particles: u64, fits: u64, problem: String, or: &str)
                 (*rows as f64 * ratio).floor()
             ),
         ),
-        ClothSource::Pattern { options, .. } => c.err(
-            "cloth.pattern",
-            "particle_distance_m",
-            problem,
-            format!(
-                "use particle_distance_m = {:.4} or more, {or}",
-                options.particle_distance / ratio
-            ),
-        ),
+        ClothSource::Pattern { options, path, .. } => {
+            // Rounded up, so that the spacing given is one that fits.
+            let spacing = (options.particle_distance / ratio * 1e4).ceil() / 1e4;
+            let mut fix = format!("use particle_distance_m = {spacing:.4} or more, {or}");
+            // A garment too large to be one is a unit slip: fix that first.
+            let span = Pattern::load(path).ok().map(|p| garment_span(&p, options));
+            if let Some(span) = span.filter(|s| !in_garment_range(*s)) {
+                fix = format!(
+                    "first check units_in_meter in {} (the garment spans {span:.3} m); \
+                     if it is right, {fix}",
+                    path.display()
+                );
+            }
+            c.err("cloth.pattern", "particle_distance_m", problem, fix)
+        }
         ClothSource::Mesh { .. } => c.err(
             "cloth",
             "mesh",
@@ -364,6 +370,21 @@ pub const GARMENT_SIZE_RANGE_M: (f64, f64) = (0.05, 5.0);
 /// (20 cm) at the shipped 2 cm spacing is 10; a T-shirt at 0.5 m is under 3, a few dozen
 /// particles that keep nothing of its cut.
 pub const MIN_PARTICLES_ACROSS: f64 = 10.0;
+
+/// The largest side of the box around the pattern's placed panels, in m.
+fn garment_span(pattern: &Pattern, options: &GarmentOptions) -> f64 {
+    let boxes = panel_reach(pattern, options);
+    let lo = boxes.iter().fold(DVec3::INFINITY, |a, b| a.min(b.1[0]));
+    let hi = boxes.iter().fold(DVec3::NEG_INFINITY, |a, b| a.max(b.1[1]));
+    (hi - lo).max_element()
+}
+
+/// Whether a garment span is one a garment has (`GARMENT_SIZE_RANGE_M`); an infinite or NaN
+/// span, refused elsewhere, counts as one.
+fn in_garment_range(span: f64) -> bool {
+    let (small, large) = GARMENT_SIZE_RANGE_M;
+    !span.is_finite() || (small..=large).contains(&span)
+}
 
 /// Each panel's farthest reach from the origin once placed, in m, and its placed bounding box:
 /// the box of its outline's curves (`Curve::bounds`) carried into 3D.
@@ -434,12 +455,9 @@ pub fn load_warnings(scene: &Scene) -> Vec<String> {
     if let ClothSource::Pattern { path, options, .. } = &scene.cloth {
         // A pattern that does not load is refused later, with its own message.
         if let Ok(pattern) = Pattern::load(path) {
-            let boxes = panel_reach(&pattern, options);
-            let lo = boxes.iter().fold(DVec3::INFINITY, |a, b| a.min(b.1[0]));
-            let hi = boxes.iter().fold(DVec3::NEG_INFINITY, |a, b| a.max(b.1[1]));
-            let size = (hi - lo).max_element();
+            let size = garment_span(&pattern, options);
             let (small, large) = GARMENT_SIZE_RANGE_M;
-            if size.is_finite() && !(small..=large).contains(&size) {
+            if !in_garment_range(size) {
                 out.push(format!(
                     "{}: with units_in_meter = {} the garment spans {size:.3} m, {} than any \
                      garment ({small} to {large} m): check properties.units_in_meter (100 for \

@@ -302,6 +302,18 @@ pub fn warnings(scene: &Scene) -> Vec<String> {
         out.push(scene.error(table, key, problem, fix).one_line());
     };
     if let Some(w) = &scene.wind {
+        let speed = gust_speed(w);
+        if speed > MAX_WIND_SPEED {
+            warn(
+                "wind",
+                "velocity_m_s",
+                format!(
+                    "its gusts reach {speed:.0} m/s, faster than any storm's (the strongest \
+                     gust measured, 113 m/s): the cloth will tear"
+                ),
+                "a breeze is about 3 m/s, a gale 20 m/s",
+            );
+        }
         if w.air_density > 5.0 {
             warn(
                 "wind",
@@ -403,6 +415,10 @@ pub fn warnings(scene: &Scene) -> Vec<String> {
     }
     out
 }
+
+/// The wind speed past which, at its strongest gust, a scene is warned, in m/s: above the
+/// strongest gust measured on Earth (113 m/s, Barrow Island, 1996).
+pub const MAX_WIND_SPEED: f64 = 113.0;
 
 /// The seam stiffness past which, as a multiple of the fabric's stretch stiffness, a scene
 /// is warned: the default is 2; seams a hundred times stiffer than the cloth they join hold

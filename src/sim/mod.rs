@@ -502,21 +502,16 @@ pub fn simulate_from(
         }
         let strain = health.max_strain;
         if strain > prep.max_strain {
-            let advice = match prep.seam_stiffness_ratio {
-                Some(r) if r > crate::scene::limits::MAX_SEAM_STIFFNESS_RATIO => format!(
-                    "the seams pulled the panels together at once: \
-                     cloth.pattern.seam_stiffness_n_m is {r:.0} times the fabric's stretch \
-                     stiffness; leave it out (twice the fabric's)"
-                ),
-                _ if prep.colors.is_some() => "the implicit solve did not hold the cloth \
-                                               together: use more substeps or \
-                                               solver.iterations, or a longer \
-                                               seam_sewing_time_s"
-                    .to_string(),
-                _ => "the substep is too large for the fabric's stiffness: use substeps = \
-                      \"auto\", more substeps, or integrator = \"implicit\""
-                    .to_string(),
-            };
+            let advice = explosion_cause(prep).unwrap_or_else(|| {
+                if prep.colors.is_some() {
+                    "the implicit solve did not hold the cloth together: use more substeps or \
+                     solver.iterations, or a longer seam_sewing_time_s"
+                } else {
+                    "the substep is too large for the fabric's stiffness: use substeps = \
+                     \"auto\", more substeps, or integrator = \"implicit\""
+                }
+                .to_string()
+            });
             return Err(Error::Unstable(format!(
                 "frame {frame} ({substeps}): a spring at {} is stretched by {:.0}%, past \
                  solver.max_strain = {:.0}%: the frame exploded and was not written. At a \
@@ -528,11 +523,15 @@ pub fn simulate_from(
             )));
         }
         if health.max_speed > prep.max_speed {
+            let advice = explosion_cause(prep).unwrap_or_else(|| {
+                "the step is too large for the fabric's stiffness: use substeps = \"auto\", \
+                 more substeps or integrator = \"implicit\""
+                    .to_string()
+            });
             return Err(Error::Unstable(format!(
                 "frame {frame} ({substeps}): a particle moves at {:.3e} m/s, past \
                  solver.max_speed_m_s = {} m/s: the run diverged and the frame was not written. \
-                 At a substep of {:.3e} s, the step is too large for the fabric's stiffness: use \
-                 substeps = \"auto\", more substeps or integrator = \"implicit\"",
+                 At a substep of {:.3e} s, {advice}",
                 health.max_speed, prep.max_speed, prep.params.dt
             )));
         }
@@ -630,6 +629,28 @@ pub fn simulate_from(
         }
     }
     Ok(())
+}
+
+/// What in the scene, rather than the substep, most likely tore the cloth apart, with its fix:
+/// seams far stiffer than the fabric, or a wind whose drag already set the substep.
+fn explosion_cause(prep: &Prepared) -> Option<String> {
+    if let Some(r) = prep
+        .seam_stiffness_ratio
+        .filter(|&r| r > crate::scene::limits::MAX_SEAM_STIFFNESS_RATIO)
+    {
+        return Some(format!(
+            "the seams pulled the panels together at once: cloth.pattern.seam_stiffness_n_m \
+             is {r:.0} times the fabric's stretch stiffness; leave it out (twice the fabric's)"
+        ));
+    }
+    let wind = prep.wind.as_ref()?;
+    (prep.dt_limited_by == "wind drag").then(|| {
+        format!(
+            "chosen for the wind's drag, the wind tore the cloth: wind.velocity_m_s ({:.0} m/s) \
+             is past what cloth survives; give at most a storm's (about 30 m/s)",
+            wind.velocity.length()
+        )
+    })
 }
 
 /// The run-constant parameters after frame `frame`: gravity once its start frame is done, and
