@@ -425,6 +425,20 @@ fn check_pattern_scale(scene: &Scene) -> Result<(), InputError> {
         return Ok(());
     };
     let pattern = Pattern::load(path)?;
+    let mut placed: Vec<&String> = options.placement.keys().collect();
+    placed.sort();
+    if let Some(name) = placed
+        .into_iter()
+        .find(|name| !pattern.panels.iter().any(|p| &&p.name == name))
+    {
+        let names: Vec<&str> = pattern.panels.iter().map(|p| p.name.as_str()).collect();
+        return Err(scene.error(
+            &format!("cloth.pattern.placement.{name}"),
+            "",
+            format!("the pattern has no panel {name:?}: this placement would be ignored"),
+            format!("use one of {names:?}"),
+        ));
+    }
     let (_, hi) = SAFE_MAGNITUDE;
     let spacing = options.particle_distance;
     let limit = hi.min(spacing / MIN_EDGE_PER_COORDINATE);
