@@ -48,6 +48,16 @@ fn obj_bytes(vertices: u64, triangles: u64, uv: bool) -> u64 {
     vertices * vertex + triangles * face
 }
 
+/// The frames a run of `frames` frames writes after frame `from`: frame 0 (when it starts
+/// there), every `every`-th, and the last.
+fn written_frames(from: u32, frames: u32, every: u32) -> u64 {
+    let every = every.max(1);
+    let first = (from == 0) as u64;
+    let on_schedule = (frames / every).saturating_sub(from / every) as u64;
+    let last = (frames > from && frames % every != 0) as u64;
+    first + on_schedule + last
+}
+
 /// The files `prep`'s run writes into its output folder, from frame `from` (a resumed run
 /// writes only what is left).
 pub fn estimate(scene: &Scene, prep: &Prepared, from: u32) -> OutputEstimate {
@@ -55,7 +65,7 @@ pub fn estimate(scene: &Scene, prep: &Prepared, from: u32) -> OutputEstimate {
     let n = prep.model.len() as u64;
     let t = prep.model.triangles.len() as u64;
     let frames_left = prep.frames.saturating_sub(from) as u64;
-    let written = frames_left / out.every as u64 + 2;
+    let written = written_frames(from, prep.frames, out.every);
     let cloth = obj_bytes(n, t, prep.garment.is_some());
     let mut per_frame = 0;
     let mut once = 0;
@@ -91,10 +101,12 @@ pub fn estimate(scene: &Scene, prep: &Prepared, from: u32) -> OutputEstimate {
     if out.pc2 {
         once += cloth;
     }
-    once += 2 * (32 * n + written * 12 * n * (out.pc2 || out.gltf) as u64);
+    once += 2 * 32 * n;
+    per_frame += 2 * 12 * n * (out.pc2 || out.gltf) as u64;
     // frames.csv has a row of about 100 bytes a simulated frame, and a checkpoint each row's
-    // record (about 170 bytes), briefly twice.
-    once += frames_left * (100 + 2 * 170);
+    // record (about 170 bytes), briefly twice: `every` simulated frames a written one (all of
+    // them when fewer are left).
+    per_frame += out.every.min(frames_left.max(1) as u32) as u64 * (100 + 2 * 170);
     let p = &scene.preview;
     let png = PNG_BYTES_PER_PIXEL * p.size.0 as u64 * p.size.1 as u64;
     once += p.last.len() as u64 * png;
@@ -162,6 +174,7 @@ pub fn check_space(
     }
     let per_frame = estimate.bytes_per_frame.max(1);
     let room = free.saturating_sub(estimate.bytes_once);
+    // Frame 0 and the last are written whatever the schedule.
     let frames_fit = (room / per_frame).saturating_sub(2);
     let every_fit = (need as f64 / free.max(1) as f64 * scene.output.every as f64).ceil();
     Err(scene.error(
@@ -234,6 +247,26 @@ mod tests {
             estimate >= actual && estimate < 2 * actual,
             "{estimate} vs {actual}"
         );
+    }
+
+    #[test]
+    fn written_frames_are_frame_0_the_schedule_and_the_last() {
+        // (from, frames, every) → the frames a run writes, counted by hand: 0–3; 0, 6, …,
+        // 48, 52; 0, 6, …, 48; after a checkpoint at 8: 9, 10; at 8 with every 6: 12, 13.
+        for ((from, frames, every), want) in [
+            ((0, 3, 1), 4),
+            ((0, 52, 6), 10),
+            ((0, 48, 6), 9),
+            ((8, 10, 1), 2),
+            ((8, 13, 6), 2),
+            ((8, 8, 6), 0),
+        ] {
+            assert_eq!(
+                written_frames(from, frames, every),
+                want,
+                "{from}, {frames}, {every}"
+            );
+        }
     }
 
     #[test]
