@@ -401,6 +401,36 @@ fn a_folder_or_file_of_the_user_s_with_an_item_s_name_is_never_replaced() {
 }
 
 #[test]
+fn the_report_names_a_damaged_item_and_leaves_out_what_is_not_an_item() {
+    let dir = workdir("report-damaged");
+    write_scene(&dir, "sheet.toml", 2);
+    let manifest = write_manifest(&dir, 2);
+    let out = dir.join("out");
+    let args = [manifest.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    let r = batch(&[&args[..], &["--backend", "cpu"]].concat());
+    assert!(r.status.success(), "{}", text(&r));
+    // item-00's summary cut in half after it was marked done, and a folder of the user's.
+    let summary = out.join("item-00/summary.json");
+    let bytes = std::fs::read(&summary).unwrap();
+    std::fs::write(&summary, &bytes[..bytes.len() / 2]).unwrap();
+    std::fs::create_dir_all(out.join("notes")).unwrap();
+    let r = batch(&["report", out.to_str().unwrap()]);
+    assert!(r.status.success(), "{}", text(&r));
+    let md = std::fs::read_to_string(out.join("batch.md")).unwrap();
+    assert!(md.contains("| 2 | 1 | 0 | 0 |"), "{md}");
+    assert!(md.contains("| damaged | 1 | item-00 |"), "{md}");
+    assert!(md.contains("left out: notes."), "{md}");
+    // A run's own folder is not a batch's.
+    let r = batch(&["report", out.join("item-01").to_str().unwrap()]);
+    assert_eq!(r.status.code(), Some(2), "{}", text(&r));
+    assert!(
+        text(&r).contains("is a run's output folder"),
+        "{}",
+        text(&r)
+    );
+}
+
+#[test]
 fn a_failing_item_fails_alone_and_is_reported_by_cause() {
     let dir = workdir("failures");
     write_scene(&dir, "sheet.toml", 4);

@@ -1,7 +1,7 @@
 //! `drapekit batch report DIR`: every item folder's summary in one table (`batch.csv`) and an
 //! overview (`batch.md`: counts, failures by cause, time per item).
 
-use super::item::{read_marker, Failure, ERROR_JSON, ITEM_JSON, PARTIAL};
+use super::item::{read_marker, Failure, DONE, ERROR_JSON, ITEM_JSON, PARTIAL};
 use crate::atomic_file::write_atomic;
 use crate::error::{Error, InputError};
 use serde_json::Value;
@@ -48,7 +48,12 @@ pub struct Report {
     pub rows: Vec<Vec<String>>,
     /// Hidden folders of items being built now, or abandoned by a killed run.
     pub partial: usize,
+    /// Folders that are not items (no item.json, no marker), by name.
+    pub ignored: Vec<String>,
 }
+
+/// The status of an item marked done whose summary.json is missing or does not read.
+pub const DAMAGED: &str = "damaged";
 
 impl Report {
     /// The cell of `column` in `row`.
@@ -82,8 +87,25 @@ pub fn write(dir: &Path) -> Result<Report, Error> {
         if name.starts_with('.') || !entry.path().is_dir() {
             continue;
         }
-        report.rows.push(row(&entry.path(), &name));
+        // Every item folder holds item.json (written before it is published) or its marker;
+        // another folder is not the batch's.
+        let path = entry.path();
+        if !path.join(ITEM_JSON).is_file() && !path.join(DONE).is_file() {
+            report.ignored.push(name);
+            continue;
+        }
+        report.rows.push(row(&path, &name));
     }
+    if report.rows.is_empty() && dir.join("summary.json").is_file() {
+        return Err(InputError::new(
+            dir,
+            "",
+            "is a run's output folder (it holds summary.json), not a batch's",
+            "give the --out folder of `drapekit batch`",
+        )
+        .into());
+    }
+    report.ignored.sort();
     report.rows.sort();
     let mut csv = COLUMNS.join(",") + "\n";
     for r in &report.rows {
@@ -107,10 +129,21 @@ fn row(path: &Path, id: &str) -> Vec<String> {
     let item = read(ITEM_JSON);
     let failure: Option<Failure> = serde_json::from_value(read(ERROR_JSON)).ok();
     // Without a marker the folder was left by a transient failure: the next run redoes it.
+    // Marked done without a summary that reads, it was damaged since.
     let status = match read_marker(path) {
+        Some(m) if m.status == "ok" && summary.is_null() => DAMAGED.to_string(),
         Some(m) => m.status,
         None => "unfinished".into(),
     };
+    let failure = failure.or_else(|| {
+        (status == DAMAGED).then(|| Failure {
+            kind: DAMAGED.into(),
+            exit_code: 2,
+            message: "summary.json is missing or not JSON: delete the folder, and the next \
+                      run redoes the item"
+                .into(),
+        })
+    });
     let text = |v: &Value| match v {
         Value::Null => String::new(),
         Value::String(s) => s.clone(),
@@ -194,6 +227,19 @@ fn markdown(report: &Report) -> String {
     );
     md += "\"unfinished\": the folder of a transient failure (GPU, I/O), which the next run \
            redoes.\n";
+    if count(DAMAGED) > 0 {
+        md += &format!(
+            "{} item(s) marked done have no summary.json that reads (\"{DAMAGED}\"): delete \
+             their folders, and the next run redoes them.\n",
+            count(DAMAGED)
+        );
+    }
+    if !report.ignored.is_empty() {
+        md += &format!(
+            "Not item folders (no item.json), left out: {}.\n",
+            report.ignored.join(", ")
+        );
+    }
     if report.partial > 0 {
         md += &format!(
             "{} hidden `.partial~` folder(s): items being built now, or abandoned by a killed \
