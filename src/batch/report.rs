@@ -309,6 +309,7 @@ mod tests {
                 row("d", "-1"),
             ],
             partial: 0,
+            ignored: Vec::new(),
         };
         let md = markdown(&report);
         assert!(

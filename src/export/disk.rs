@@ -54,7 +54,7 @@ fn written_frames(from: u32, frames: u32, every: u32) -> u64 {
     let every = every.max(1);
     let first = (from == 0) as u64;
     let on_schedule = (frames / every).saturating_sub(from / every) as u64;
-    let last = (frames > from && frames % every != 0) as u64;
+    let last = (frames > from && !frames.is_multiple_of(every)) as u64;
     first + on_schedule + last
 }
 
