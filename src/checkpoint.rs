@@ -52,6 +52,39 @@ pub struct CheckpointHeader {
     pub kept_frames: Vec<u32>,
     /// Frames the exporter had written.
     pub exported_frames: usize,
+    /// Each file the scene reads besides itself (pattern, cloth mesh, bodies, texture) and
+    /// the SHA-256 of its contents then: a resume refuses a changed one (empty in checkpoints
+    /// written before it was kept).
+    #[serde(default)]
+    pub input_files: Vec<(String, String)>,
+}
+
+/// The files `scene` reads besides itself, each with the SHA-256 of its contents ("missing"
+/// for one that cannot be read).
+pub fn input_files(scene: &crate::scene::Scene) -> Vec<(String, String)> {
+    let inputs = crate::run_folder::inputs(scene);
+    let paths = (inputs.pattern.into_iter())
+        .chain(inputs.cloth_mesh)
+        .chain(inputs.bodies.into_iter().flatten())
+        .chain(inputs.texture);
+    paths
+        .map(|path| {
+            let sha = std::fs::read(&path).map_or_else(
+                |_| "missing".to_string(),
+                |bytes| format!("{:x}", Sha256::digest(&bytes)),
+            );
+            (path, sha)
+        })
+        .collect()
+}
+
+impl CheckpointHeader {
+    /// The first of the files the checkpoint's run read that has changed since, if any.
+    pub fn changed_input(&self, now: &[(String, String)]) -> Option<&str> {
+        (self.input_files.iter())
+            .find(|(path, sha)| now.iter().all(|(p, s)| p != path || s != sha))
+            .map(|(path, _)| path.as_str())
+    }
 }
 
 /// A checkpoint: its header and arrays.

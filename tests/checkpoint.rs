@@ -290,6 +290,47 @@ fn resume_refuses_frames_it_already_has_and_runs_from_the_checkpoint_s_scene_whe
     assert_eq!(summary(&out)["frames"], 4);
 }
 
+#[test]
+fn resume_refuses_a_cloth_mesh_changed_since_the_checkpoint() {
+    // The same vertex count, so that only the file's contents can tell: a comment is enough.
+    let dir = out_dir("input-changed");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mesh = dir.join("strip.obj");
+    std::fs::copy(common::fixture("meshes/folded_strip.obj"), &mesh).unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        "[cloth.mesh]\npath = \"strip.obj\"\n[fabric]\npreset = \"cotton\"\n\
+         [solver]\nframes = 2\n[output]\nobj = false\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let r = drapekit(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--quiet",
+        "--checkpoint-every",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let original = std::fs::read_to_string(&mesh).unwrap();
+    std::fs::write(&mesh, format!("# edited\n{original}")).unwrap();
+    let r = drapekit(&["resume", out.to_str().unwrap(), "--frames", "3"]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("strip.obj: contents: the file changed since the checkpoint"),
+        "{stderr}"
+    );
+    std::fs::write(&mesh, original).unwrap();
+    let r = drapekit(&["resume", out.to_str().unwrap(), "--frames", "3"]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+}
+
 /// A checkpoint file's magic line, then its header's length (8 bytes, little-endian), header
 /// (JSON), arrays and the SHA-256 of all that (32 bytes): the header and the arrays.
 fn split_checkpoint(bytes: &[u8]) -> (serde_json::Value, Vec<u8>) {

@@ -14,6 +14,7 @@ use crate::scene::Scene;
 use crate::sim::{prepare, simulate_from, Prepared, ResumeFrom, RunStats};
 use crate::solver::Solver;
 use coarse_start::coarse_start;
+use std::path::Path;
 use std::path::PathBuf;
 use std::str::FromStr;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -225,6 +226,17 @@ pub fn resume_run(
             "restore the scene as it was, or rerun it from the start with drapekit run",
         )));
     }
+    if let Some(path) = h.changed_input(&crate::checkpoint::input_files(&scene)) {
+        return Err(Error::Input(crate::error::InputError::new(
+            Path::new(path),
+            "contents",
+            format!(
+                "the file changed since the checkpoint in {} was written",
+                dir.display()
+            ),
+            "restore the file as it was, or rerun the scene from the start with drapekit run",
+        )));
+    }
     let opts = RunOptions {
         backend: h.backend.parse().map_err(|e: String| {
             Error::Input(crate::error::InputError::new(
@@ -329,6 +341,7 @@ fn run_scene_from(
             })
         }
     };
+    let input_files = crate::checkpoint::input_files(&scene);
     let checkpoint = |frame: u32,
                       state: &crate::solver::ParticleState,
                       stats: &RunStats,
@@ -351,6 +364,7 @@ fn run_scene_from(
                 outputs: outputs.to_vec(),
                 kept_frames: kept_frames.to_vec(),
                 exported_frames,
+                input_files: input_files.clone(),
             },
             state: state.clone(),
             kept: kept.to_vec(),
