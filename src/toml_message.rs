@@ -199,12 +199,14 @@ fn wrong_type(place: &Place, found: &str, expected: &str) -> (String, String, St
         .or_else(|| between(found, "\"", "\""))
         .unwrap_or("");
     let number: Option<f64> = literal.parse().ok();
+    // A whole number past 2⁵³ is no count anyone means: its digits are not worth repeating.
+    let count = |x: f64| x.fract() == 0.0 && x.abs() < 9.007e15;
     let quoted = found.starts_with("string");
     let fix = match (whole_number(expected), number) {
-        (true, Some(x)) if x.fract() == 0.0 && quoted => {
+        (true, Some(x)) if count(x) && quoted => {
             format!("write `{key} = {x}`, without quotes")
         }
-        (true, Some(x)) if x.fract() == 0.0 => {
+        (true, Some(x)) if count(x) => {
             format!("write `{key} = {x}`, without a decimal point")
         }
         (true, _) => format!("write a whole number, e.g. `{key} = 2`"),
@@ -263,6 +265,8 @@ fn expectation(expected: &str, key: &str) -> String {
         "a string" => "text in quotes".to_string(),
         "a boolean" => "true or false".to_string(),
         "a sequence" => "a list in brackets".to_string(),
+        // serde names the Rust type a table is read into ("struct RawGrid"): a table to a user.
+        other if other.starts_with("struct ") || other == "a map" => "a table of keys".into(),
         other => other.to_string(),
     }
 }
@@ -384,6 +388,20 @@ mod tests {
         let (_, problem, fix) = explain("invalid type: string \"1\", expected u32", &place);
         assert_eq!(problem, "expected a whole number ≥ 0, found the text \"1\"");
         assert_eq!(fix, "write `frames = 1`, without quotes");
+        let (_, _, fix) = explain("invalid type: floating point `1e30`, expected i64", &place);
+        assert_eq!(fix, "write a whole number, e.g. `frames = 2`");
+    }
+
+    #[test]
+    fn a_table_is_named_a_table_not_the_type_it_is_read_into() {
+        let place = Place {
+            table: "cloth".into(),
+            key: "grid".into(),
+            on_header: false,
+        };
+        let (_, problem, fix) = explain("invalid type: sequence, expected struct RawGrid", &place);
+        assert_eq!(problem, "expected a table of keys, found sequence");
+        assert!(!fix.contains("Raw"), "{fix}");
     }
 
     #[test]
