@@ -330,3 +330,29 @@ fn a_run_writes_previews_every_n_frames_and_an_animation() {
     assert!(green > 50, "{green} green pixels");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_run_stopped_before_its_summary_is_named_as_such() {
+    // A run killed mid-way leaves frames and no summary.json: exit 2 with what happened and
+    // what to do, not an I/O error on a missing file.
+    let dir = std::env::temp_dir().join(format!("drapekit-killed-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(
+        common::fixture("meshes/folded_strip.obj"),
+        dir.join("frame_0000.obj"),
+    )
+    .unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .args(["preview", dir.to_str().unwrap(), "--out"])
+        .arg(dir.join("p.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("it was stopped before it finished"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("drapekit resume"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

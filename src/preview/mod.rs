@@ -108,7 +108,18 @@ type FrameList = Vec<(u32, PathBuf)>;
 fn run_summary(run: &Path) -> Result<(Option<Scene>, f32, Option<FrameList>), Error> {
     let summary_path = run.join("summary.json");
     let summary: serde_json::Value = std::fs::read(&summary_path)
-        .map_err(|e| Error::io(&summary_path, e))
+        .map_err(|e| match e.kind() {
+            // Frames but no summary: a run killed before it finished.
+            std::io::ErrorKind::NotFound if run.join("frame_0000.obj").is_file() => bad(
+                &summary_path,
+                "the run in this folder has frames but no summary: it was stopped before it \
+                 finished"
+                    .to_string(),
+                "continue it with drapekit resume (if it wrote a checkpoint) or rerun it; its \
+                 frames open in any OBJ viewer meanwhile",
+            ),
+            _ => Error::io(&summary_path, e),
+        })
         .and_then(|b| {
             serde_json::from_slice(&b).map_err(|e| {
                 bad(
