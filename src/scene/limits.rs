@@ -314,6 +314,17 @@ pub fn warnings(scene: &Scene) -> Vec<String> {
                 "a breeze is about 3 m/s, a gale 20 m/s",
             );
         }
+        if w.gust_amplitude > 0.0 && w.gust_frequency > MAX_GUST_FREQUENCY {
+            warn(
+                "wind",
+                "gust_frequency_hz",
+                format!(
+                    "{} Hz is a vibration, not a gust: wind gusts come seconds apart",
+                    w.gust_frequency
+                ),
+                "gusts are about 0.1 to 2 Hz",
+            );
+        }
         if w.air_density > 5.0 {
             warn(
                 "wind",
@@ -378,6 +389,18 @@ pub fn warnings(scene: &Scene) -> Vec<String> {
             "start gravity within the run, or run more frames",
         );
     }
+    if let Some(ratio) = seam_stiffness_ratio(scene).filter(|&r| r < MIN_SEAM_STIFFNESS_RATIO) {
+        warn(
+            "cloth.pattern",
+            "seam_stiffness_n_m",
+            format!(
+                "{ratio:.1e} times the fabric's stretch stiffness: seams that weak never pull \
+                 the panels shut"
+            ),
+            "leave it out (twice the fabric's stretch stiffness), or use at least a tenth of \
+             the fabric's",
+        );
+    }
     if let Some(ratio) = seam_stiffness_ratio(scene).filter(|&r| r > MAX_SEAM_STIFFNESS_RATIO) {
         warn(
             "cloth.pattern",
@@ -424,6 +447,14 @@ pub const MAX_WIND_SPEED: f64 = 113.0;
 /// is warned: the default is 2; seams a hundred times stiffer than the cloth they join hold
 /// nothing better and pull the panels shut in a single substep.
 pub const MAX_SEAM_STIFFNESS_RATIO: f64 = 100.0;
+
+/// The seam stiffness below which, as a multiple of the fabric's stretch stiffness, a scene is
+/// warned: seams a hundred times softer than the cloth stretch open under its own weight.
+pub const MIN_SEAM_STIFFNESS_RATIO: f64 = 0.01;
+
+/// The gust frequency past which a scene is warned, in Hz: gusts come seconds apart; tens of
+/// cycles a second shake the cloth instead.
+pub const MAX_GUST_FREQUENCY: f32 = 10.0;
 
 /// A pattern's seam stiffness as a multiple of its fabric's stiffest stretch stiffness
 /// (`None` for grids and meshes, which have no seams).
@@ -480,5 +511,49 @@ mod tests {
         // seam_sewing_time_s = 0.6 at 24 fps: 14 frames end at 0.583 s, 15 at 0.625 s.
         assert!(sewing("frames = 14"));
         assert!(!sewing("frames = 15"));
+    }
+
+    #[test]
+    fn seams_far_weaker_or_stiffer_than_the_fabric_are_warned() {
+        // Cotton's stiffest stretch is 4,050 N/m: the default seam (twice that), 1% and 100
+        // times pass; below and above do not.
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes/tshirt_drape_cotton.toml");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let warned = |stiffness: &str| {
+            let with = format!("seam_sewing_time_s = 0.6\nseam_stiffness_n_m = {stiffness}");
+            let text = text.replace("seam_sewing_time_s = 0.6", &with);
+            let scene = Scene::parse(&text, &path).unwrap();
+            let w = warnings(&scene);
+            (w.iter())
+                .find(|w| w.contains("seam_stiffness_n_m"))
+                .cloned()
+        };
+        for fine in ["8100", "40.5", "405000"] {
+            assert_eq!(warned(fine), None, "{fine}");
+        }
+        assert!(warned("40").unwrap().contains("never pull the panels shut"));
+        assert!(warned("406000").unwrap().contains("snap the panels shut"));
+    }
+
+    #[test]
+    fn a_wind_past_any_storm_or_gusting_like_a_vibration_is_warned() {
+        let warned = |wind: &str| {
+            let text = format!(
+                "[cloth.grid]\nwidth_m = 1.0\nheight_m = 1.0\ncolumns = 8\nrows = 8\n\
+                 [fabric]\npreset = \"cotton\"\n[wind]\n{wind}\n[solver]\nframes = 24\n"
+            );
+            warnings(&Scene::parse(&text, Path::new("scene.toml")).unwrap())
+        };
+        assert!(warned("velocity_m_s = [20.0, 0.0, 0.0]\ngust_amplitude = 0.5").is_empty());
+        // 80 m/s with 50% gusts reaches 120 m/s.
+        let storm = warned("velocity_m_s = [80.0, 0.0, 0.0]\ngust_amplitude = 0.5");
+        assert!(storm[0].contains("gusts reach 120 m/s"), "{storm:?}");
+        let shaking =
+            warned("velocity_m_s = [5.0, 0.0, 0.0]\ngust_amplitude = 0.3\ngust_frequency_hz = 1e6");
+        assert!(
+            shaking[0].contains("a vibration, not a gust"),
+            "{shaking:?}"
+        );
     }
 }
