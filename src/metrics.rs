@@ -7,6 +7,49 @@ use crate::solver::ParticleState;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
+/// The bodies farther from the cloth than the cloth can travel in the run, which touch
+/// nothing: each one's index and its distance from the cloth's box, in m. The cloth's reach is
+/// its box grown by `REACH_MARGIN_M` all round, swept along gravity by the distance a free fall
+/// covers in `run_s` and downwind at the wind's speed. Only bodies that stay where they are
+/// (no motion, no animation) are judged.
+pub fn unreachable_bodies(
+    model: &ClothModel,
+    gravity: Vec3,
+    wind: Vec3,
+    run_s: f32,
+) -> Vec<(usize, f32)> {
+    let (cloth_lo, cloth_hi) = bounds(model.positions.iter().copied());
+    let margin = Vec3::splat(REACH_MARGIN_M);
+    let (lo, hi) = (cloth_lo - margin, cloth_hi + margin);
+    let drift = 0.5 * gravity * run_s * run_s + wind * run_s;
+    let (reach_lo, reach_hi) = (lo.min(lo + drift), hi.max(hi + drift));
+    let apart = |(a_lo, a_hi): (Vec3, Vec3), (b_lo, b_hi): (Vec3, Vec3)| {
+        (b_lo - a_hi).max(a_lo - b_hi).max(Vec3::ZERO).length()
+    };
+    (model.colliders.iter().enumerate())
+        .filter(|(_, c)| !c.motion.moves() && c.deformed.is_none())
+        .filter_map(|(i, c)| {
+            let pose = c.motion.at(0.0);
+            let world =
+                (c.body.mesh.positions.iter()).map(|&p| pose.rotation * p + pose.translation);
+            let body = bounds(world);
+            (apart((reach_lo, reach_hi), body) > 0.0)
+                .then(|| (i, apart((cloth_lo, cloth_hi), body)))
+        })
+        .collect()
+}
+
+/// How far, in m, beyond its box and its fall the cloth is taken to reach: a swing, a
+/// billow, a sleeve thrown out.
+pub const REACH_MARGIN_M: f32 = 1.0;
+
+/// The box around `points`.
+fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
+    points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+        (lo.min(p), hi.max(p))
+    })
+}
+
 /// Largest relative stretch (L − L0)/L0 over all springs.
 pub fn max_edge_strain(positions: &[Vec4], springs: &[Spring]) -> f32 {
     springs

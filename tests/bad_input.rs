@@ -377,6 +377,54 @@ fn a_wind_past_any_storm_is_warned_and_blamed_when_the_cloth_flies_apart() {
 }
 
 #[test]
+fn a_body_the_cloth_cannot_reach_in_the_run_is_warned() {
+    // A 1 m cloth at 0.65 m over a 0.3 m sphere: reached. The same sphere 100 m to the side:
+    // in 2 frames the cloth falls 3 cm and reaches 1 m around itself, so it touches nothing.
+    // Below by 5 m, 48 frames (2 s): a free fall covers 19.6 m, so the sphere is reached.
+    let work = std::env::temp_dir().join(format!("drapekit-far-{}", std::process::id()));
+    std::fs::create_dir_all(&work).unwrap();
+    let warned = |center: &str, frames: u32| {
+        std::fs::write(
+            work.join("s.toml"),
+            format!(
+                "[cloth.grid]\nwidth_m = 1.0\nheight_m = 1.0\ncolumns = 6\nrows = 6\n\
+                 center_m = [0.0, 0.65, 0.0]\n[fabric]\npreset = \"cotton\"\n[body]\n\
+                 shape = \"sphere\"\nradius_m = 0.3\ncenter_m = {center}\n\
+                 sdf_resolution_m = 0.05\n[solver]\nframes = {frames}\n\
+                 integrator = \"implicit\"\n[output]\nobj = false\n"
+            ),
+        )
+        .unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
+            .args([
+                "run",
+                work.join("s.toml").to_str().unwrap(),
+                "--backend",
+                "cpu",
+            ])
+            .args([
+                "--quiet",
+                "--overwrite",
+                "--out",
+                work.join("out").to_str().unwrap(),
+            ])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert_eq!(out.status.code(), Some(0), "{stderr}");
+        stderr.contains("touches nothing").then_some(stderr)
+    };
+    assert_eq!(warned("[0.0, 0.0, 0.0]", 2), None);
+    let far = warned("[100.0, 0.0, 0.0]", 2).expect("warned");
+    assert!(
+        far.contains("s.toml:12: body.center_m: the body is 99.20 m from the cloth"),
+        "{far}"
+    );
+    assert_eq!(warned("[0.0, -5.0, 0.0]", 48), None);
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+#[test]
 fn a_long_crossing_outline_is_found_in_seconds() {
     // A thin panel 75 m long that folds over itself at the far end, meshed at 1 mm: 150,000
     // outline particles. Testing every pair of segments took seconds (and 726 s for a typo's

@@ -188,6 +188,21 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     let implicit = s.integrator == INTEGRATOR_IMPLICIT;
     let mut warnings = Vec::new();
     warnings.extend(metrics::mesh_warnings(&model, garment.is_none()));
+    let run_s = s.frames as f32 / s.fps;
+    let wind = scene.wind.map_or(glam::Vec3::ZERO, |w| w.velocity);
+    for (i, apart) in metrics::unreachable_bodies(&model, scene.gravity, wind, run_s) {
+        let key = match scene.bodies[i].source {
+            crate::scene::BodySource::Mesh { .. } => "offset_m",
+            _ => "center_m",
+        };
+        let problem = format!(
+            "the body is {apart:.2} m from the cloth and stays there: the cloth cannot reach it \
+             in the run's {run_s:.2} s, so it touches nothing"
+        );
+        let fix = "place the body where the cloth is, or the cloth where the body is";
+        let e = scene.error(&scene.body_table(i), key, problem, fix);
+        warnings.push(e.one_line());
+    }
     let StepChoice {
         substeps,
         auto: auto_substeps,
