@@ -71,6 +71,13 @@ pub fn resolve(
     shards: Option<u32>,
     env: &dyn Fn(&str) -> Option<String>,
 ) -> Result<(Shard, &'static str), String> {
+    if shards == Some(0) {
+        return Err(
+            "--shards 0: a manifest is split into 1 or more shards; give --shards 1 \
+                    or more"
+                .into(),
+        );
+    }
     if let Some(s) = flag {
         if shards.is_some_and(|n| n != s.count) {
             return Err(format!(
@@ -186,6 +193,9 @@ mod tests {
             .contains("--shards"));
         assert_eq!(resolve(None, None, &env(&[])).unwrap().0, Shard::ALL);
         assert!(resolve(None, Some(3), &env(&[])).is_err());
+        // Zero shards is no split: said as such, not "give --shard i/0".
+        let zero = resolve(None, Some(0), &env(&k8s)).unwrap_err();
+        assert!(zero.contains("give --shards 1 or more"), "{zero}");
     }
 
     #[test]

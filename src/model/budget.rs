@@ -7,6 +7,7 @@ use crate::error::InputError;
 use crate::pattern::garment::GarmentOptions;
 use crate::pattern::Pattern;
 use crate::scene::limits::{MIN_EDGE_PER_COORDINATE, SAFE_MAGNITUDE};
+use crate::scene::MAX_SDF_RESOLUTION_M;
 use crate::scene::{ClothSource, Scene};
 use glam::DVec3;
 use std::path::Path;
@@ -199,13 +200,17 @@ fn sdf_too_big(scene: &Scene, i: usize, bytes: u64, room: u64, why: &str) -> Inp
     let b = &scene.bodies[i];
     let mib = |b: u64| b as f64 / 1048576.0;
     let ratio = bytes as f64 / room.max(1) as f64;
+    let spacing = b.sdf_resolution as f64 * ratio.cbrt() * 1.05;
     let fix = if room < 4096 {
         "make room for the SDF: raise solver.max_memory_mb, or use fewer particles".to_string()
-    } else {
+    } else if spacing > MAX_SDF_RESOLUTION_M {
+        // No spacing the scene may give fits: the body is far larger than any person.
         format!(
-            "use sdf_resolution_m = {:.4} or coarser",
-            b.sdf_resolution as f64 * ratio.cbrt() * 1.05
+            "even sdf_resolution_m = {MAX_SDF_RESOLUTION_M} (the coarsest) is too fine for a \
+             body this large: check its size and its units"
         )
+    } else {
+        format!("use sdf_resolution_m = {spacing:.4} or coarser")
     };
     scene.error(
         &scene.body_table(i),

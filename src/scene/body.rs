@@ -425,7 +425,13 @@ fn parse(c: &Checker, base: &Path, b: &RawBody, t: &str) -> Result<BodySettings,
     // 10 cm is no longer cloth touching a body. SDF cells finer than 0.1 mm cost gigabytes for
     // a body; coarser than 0.5 m cannot resolve one.
     let thickness = c.within(t, "thickness_m", b.thickness_m, (1e-5, 0.1), "m")?;
-    let resolution = c.within(t, "sdf_resolution_m", b.sdf_resolution_m, (1e-4, 0.5), "m")?;
+    let resolution = c.within(
+        t,
+        "sdf_resolution_m",
+        b.sdf_resolution_m,
+        (1e-4, MAX_SDF_RESOLUTION_M),
+        "m",
+    )?;
     let mut keys = Vec::new();
     for (k, kf) in b.keyframes.iter().enumerate() {
         let table = format!("{t}.keyframes[{k}]");
@@ -634,3 +640,6 @@ fn parse_deform(
         plays: b.plays as u32,
     }))
 }
+
+/// The coarsest `sdf_resolution_m` a scene may give, in m.
+pub const MAX_SDF_RESOLUTION_M: f64 = 0.5;

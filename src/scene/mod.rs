@@ -14,7 +14,9 @@ mod self_collision;
 mod solver;
 mod world;
 
-pub use body::{BodySettings, BodySource, DeformMotion, DeformSettings, MAX_BODIES};
+pub use body::{
+    BodySettings, BodySource, DeformMotion, DeformSettings, MAX_BODIES, MAX_SDF_RESOLUTION_M,
+};
 pub use cloth::ClothSource;
 pub use fabric::{Fabric, Grain, Orthotropic, BUCKLED_FRACTION, HINGE_PER_RIGIDITY};
 pub use pins::{Corner, GridEdge, PinSelection};
