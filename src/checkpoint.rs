@@ -60,12 +60,31 @@ pub struct CheckpointHeader {
 }
 
 /// The files `scene` reads besides itself, each with the SHA-256 of its contents ("missing"
-/// for one that cannot be read).
+/// for one that cannot be read): its pattern or cloth mesh, each body's OBJ or glTF file (not
+/// a .gltf's separate buffers) and `.pc2` vertex cache (not an OBJ sequence's frames), and
+/// the preview's texture.
 pub fn input_files(scene: &crate::scene::Scene) -> Vec<(String, String)> {
+    use crate::scene::{BodySource, DeformMotion};
     let inputs = crate::run_folder::inputs(scene);
+    let body_files = scene.bodies.iter().flat_map(|b| {
+        let skin = match &b.source {
+            BodySource::Skinned { path: Some(p), .. } => Some(p.clone()),
+            _ => None,
+        };
+        let cache = match b.deform.as_ref().map(|d| &d.motion) {
+            Some(DeformMotion::Cache { path, .. }) if !path.to_string_lossy().contains('#') => {
+                Some(path.clone())
+            }
+            _ => None,
+        };
+        skin.into_iter()
+            .chain(cache)
+            .map(|p| crate::run_folder::absolute(&p).display().to_string())
+    });
     let paths = (inputs.pattern.into_iter())
         .chain(inputs.cloth_mesh)
         .chain(inputs.bodies.into_iter().flatten())
+        .chain(body_files.collect::<Vec<_>>())
         .chain(inputs.texture);
     paths
         .map(|path| {

@@ -9,20 +9,30 @@ use rayon::prelude::*;
 
 /// The bodies farther from the cloth than the cloth can travel in the run, which touch
 /// nothing: each one's index and its distance from the cloth's box, in m. The cloth's reach is
-/// its box grown by `REACH_MARGIN_M` all round, swept along gravity by the distance a free fall
-/// covers in `run_s` and downwind at the wind's speed. Only bodies that stay where they are
-/// (no motion, no animation) are judged.
+/// its box grown by `REACH_MARGIN_M` all round, and along each axis by the distance a free fall
+/// covers in `run_s` and the distances the wind (`wind`: its mean velocity and gust amplitude)
+/// carries it downwind at its strongest gust and upwind when a gust reverses it. Each drift
+/// counts on its own, so that a wind against gravity still reaches everything in between.
+/// Only bodies that stay where they are (no motion, no animation) are judged.
 pub fn unreachable_bodies(
     model: &ClothModel,
     gravity: Vec3,
-    wind: Vec3,
+    wind: (Vec3, f32),
     run_s: f32,
 ) -> Vec<(usize, f32)> {
     let (cloth_lo, cloth_hi) = bounds(model.positions.iter().copied());
     let margin = Vec3::splat(REACH_MARGIN_M);
-    let (lo, hi) = (cloth_lo - margin, cloth_hi + margin);
-    let drift = 0.5 * gravity * run_s * run_s + wind * run_s;
-    let (reach_lo, reach_hi) = (lo.min(lo + drift), hi.max(hi + drift));
+    let (velocity, gust) = wind;
+    let drifts = [
+        0.5 * gravity * run_s * run_s,
+        (1.0 + gust) * velocity * run_s,
+        -(gust - 1.0).max(0.0) * velocity * run_s,
+    ];
+    let (mut reach_lo, mut reach_hi) = (cloth_lo - margin, cloth_hi + margin);
+    for d in drifts {
+        reach_lo += d.min(Vec3::ZERO);
+        reach_hi += d.max(Vec3::ZERO);
+    }
     let apart = |(a_lo, a_hi): (Vec3, Vec3), (b_lo, b_hi): (Vec3, Vec3)| {
         (b_lo - a_hi).max(a_lo - b_hi).max(Vec3::ZERO).length()
     };

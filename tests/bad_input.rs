@@ -383,15 +383,15 @@ fn a_body_the_cloth_cannot_reach_in_the_run_is_warned() {
     // Below by 5 m, 48 frames (2 s): a free fall covers 19.6 m, so the sphere is reached.
     let work = std::env::temp_dir().join(format!("drapekit-far-{}", std::process::id()));
     std::fs::create_dir_all(&work).unwrap();
-    let warned = |center: &str, frames: u32| {
+    let warned_with = |center: &str, frames: u32, extra: &str| {
         std::fs::write(
             work.join("s.toml"),
             format!(
                 "[cloth.grid]\nwidth_m = 1.0\nheight_m = 1.0\ncolumns = 6\nrows = 6\n\
                  center_m = [0.0, 0.65, 0.0]\n[fabric]\npreset = \"cotton\"\n[body]\n\
                  shape = \"sphere\"\nradius_m = 0.3\ncenter_m = {center}\n\
-                 sdf_resolution_m = 0.05\n[solver]\nframes = {frames}\n\
-                 integrator = \"implicit\"\n[output]\nobj = false\n"
+                 sdf_resolution_m = 0.05\n[solver]\nframes = {frames}\nsubsteps = 4\n\
+                 integrator = \"implicit\"\n[output]\nobj = false\n{extra}"
             ),
         )
         .unwrap();
@@ -414,6 +414,7 @@ fn a_body_the_cloth_cannot_reach_in_the_run_is_warned() {
         assert_eq!(out.status.code(), Some(0), "{stderr}");
         stderr.contains("touches nothing").then_some(stderr)
     };
+    let warned = |center: &str, frames: u32| warned_with(center, frames, "");
     assert_eq!(warned("[0.0, 0.0, 0.0]", 2), None);
     let far = warned("[100.0, 0.0, 0.0]", 2).expect("warned");
     assert!(
@@ -421,6 +422,10 @@ fn a_body_the_cloth_cannot_reach_in_the_run_is_warned() {
         "{far}"
     );
     assert_eq!(warned("[0.0, -5.0, 0.0]", 48), None);
+    // An updraft of 10 m/s for 2 s against gravity: the fall and the lift each count, so a
+    // sphere 3.35 m above is within reach though ½gt² + wt ends 0.38 m up.
+    let updraft = "[wind]\nvelocity_m_s = [0.0, 10.0, 0.0]\n";
+    assert_eq!(warned_with("[0.0, 4.0, 0.0]", 48, updraft), None);
     let _ = std::fs::remove_dir_all(&work);
 }
 

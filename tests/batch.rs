@@ -417,7 +417,7 @@ fn the_report_names_a_damaged_item_and_leaves_out_what_is_not_an_item() {
     let r = batch(&["report", out.to_str().unwrap()]);
     assert!(r.status.success(), "{}", text(&r));
     let md = std::fs::read_to_string(out.join("batch.md")).unwrap();
-    assert!(md.contains("| 2 | 1 | 0 | 0 |"), "{md}");
+    assert!(md.contains("| 2 | 1 | 0 | 0 | 1 |"), "{md}");
     assert!(md.contains("| damaged | 1 | item-00 |"), "{md}");
     assert!(md.contains("left out: notes."), "{md}");
     // A run's own folder is not a batch's.
@@ -493,7 +493,7 @@ fn a_failing_item_fails_alone_and_is_reported_by_cause() {
     let r = batch(&["report", out.to_str().unwrap()]);
     assert!(r.status.success(), "{}", text(&r));
     let md = std::fs::read_to_string(out.join("batch.md")).unwrap();
-    assert!(md.contains("| 4 | 2 | 2 | 0 |"), "{md}");
+    assert!(md.contains("| 4 | 2 | 2 | 0 | 0 |"), "{md}");
     assert!(md.contains("| unstable | 1 | explodes |"), "{md}");
     assert!(md.contains("| bad_input | 1 | too-big |"), "{md}");
     let csv = std::fs::read_to_string(out.join("batch.csv")).unwrap();

@@ -134,8 +134,55 @@ fn sigterm_stops_like_ctrl_c_with_a_checkpoint() {
     // What `timeout`, batch schedulers and container runtimes send before they kill.
     let (out, code, stderr) = interrupted_run("-TERM", "sigterm");
     assert_eq!(code, Some(130), "{stderr}");
+    // 100,001 frames of the hanging cloth, each written: gigabytes, said before the run starts.
+    assert!(stderr.contains("this run writes about 16."), "{stderr}");
     assert!(stderr.contains("drapekit resume"), "{stderr}");
     assert!(out.join("checkpoint.bin").exists());
+}
+
+#[test]
+fn a_hang_up_that_nohup_ignores_does_not_stop_the_run() {
+    // The handler catches hang-ups as it does SIGTERM; under nohup (SIGHUP ignored) a logout
+    // must leave the run going.
+    let out = out_dir("nohup");
+    let scene = common::fixture("scenes/hanging_cloth.toml");
+    let mut child = Command::new("nohup")
+        .arg(env!("CARGO_BIN_EXE_drapekit"))
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--backend",
+            "cpu",
+            "--quiet",
+        ])
+        .args(["--frames", "100000", "--out", out.to_str().unwrap()])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let wait_for = |frame: &str| {
+        let started = std::time::Instant::now();
+        while !out.join(frame).exists() {
+            assert!(started.elapsed().as_secs() < 60, "the run wrote no {frame}");
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+    };
+    wait_for("frame_0002.obj");
+    let id = child.id().to_string();
+    let signal = |name: &str| {
+        let status = Command::new("kill").args([name, &id]).status().unwrap();
+        assert!(status.success());
+    };
+    signal("-HUP");
+    // Frames keep coming after the hang-up: the run did not stop after its frame.
+    let written = std::fs::read_dir(&out).unwrap().count();
+    wait_for(&format!("frame_{:04}.obj", written + 5));
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the hang-up stopped the run"
+    );
+    signal("-TERM");
+    assert_eq!(child.wait().unwrap().code(), Some(130));
 }
 
 #[test]
@@ -278,6 +325,29 @@ fn resume_refuses_frames_it_already_has_and_runs_from_the_checkpoint_s_scene_whe
     let stderr = String::from_utf8_lossy(&r.stderr);
     assert_eq!(r.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("give --frames 4 or more"), "{stderr}");
+    // Nor may it end a run sooner than it went on past its checkpoint: checkpoints at 3, a
+    // run of 5, resumed to 4.
+    let further = dir.join("further");
+    let r = drapekit(
+        &[
+            &[
+                "run",
+                scene.to_str().unwrap(),
+                "--backend",
+                "cpu",
+                "--quiet",
+            ][..],
+            &["--checkpoint-every", "3", "--frames", "5"],
+            &["--out", further.to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let r = drapekit(&["resume", further.to_str().unwrap(), "--frames", "4"]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("would end it sooner"), "{stderr}");
+    assert!(stderr.contains("give --frames 5 or more"), "{stderr}");
     // The scene file deleted: the checkpoint's copy continues the run.
     std::fs::remove_file(&scene).unwrap();
     let r = drapekit(&["resume", out.to_str().unwrap(), "--frames", "4"]);

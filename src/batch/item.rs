@@ -207,6 +207,8 @@ fn refuse_foreign(dest: &Path) -> Result<(), Error> {
     }
     let what = if meta.is_dir() {
         "a folder that is not a batch item's (it has no item.json)"
+    } else if meta.is_symlink() {
+        "a link, not a batch item's folder"
     } else {
         "a file, not a batch item's folder"
     };

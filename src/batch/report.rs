@@ -215,15 +215,17 @@ fn markdown(report: &Report) -> String {
             times.push(t);
         }
     }
-    let mut md =
-        String::from("# Batch report\n\n| items | ok | failed | unfinished |\n|---|---|---|---|\n");
+    let mut md = String::from(
+        "# Batch report\n\n| items | ok | failed | unfinished | damaged |\n|---|---|---|---|---|\n",
+    );
     let count = |s: &str| by_status.get(s).copied().unwrap_or(0);
     md += &format!(
-        "| {} | {} | {} | {} |\n\n",
+        "| {} | {} | {} | {} | {} |\n\n",
         report.rows.len(),
         count("ok"),
         count("failed"),
-        count("unfinished")
+        count("unfinished"),
+        count(DAMAGED)
     );
     md += "\"unfinished\": the folder of a transient failure (GPU, I/O), which the next run \
            redoes.\n";

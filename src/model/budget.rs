@@ -201,15 +201,18 @@ fn sdf_too_big(scene: &Scene, i: usize, bytes: u64, room: u64, why: &str) -> Inp
     let mib = |b: u64| b as f64 / 1048576.0;
     let ratio = bytes as f64 / room.max(1) as f64;
     let spacing = b.sdf_resolution as f64 * ratio.cbrt() * 1.05;
+    // Nodes fall with the cube of the spacing: the field at the coarsest spacing allowed.
+    let at_coarsest = bytes as f64 * (b.sdf_resolution as f64 / MAX_SDF_RESOLUTION_M).powi(3);
     let fix = if room < 4096 {
         "make room for the SDF: raise solver.max_memory_mb, or use fewer particles".to_string()
-    } else if spacing > MAX_SDF_RESOLUTION_M {
+    } else if at_coarsest > room as f64 {
         // No spacing the scene may give fits: the body is far larger than any person.
         format!(
             "even sdf_resolution_m = {MAX_SDF_RESOLUTION_M} (the coarsest) is too fine for a \
              body this large: check its size and its units"
         )
     } else {
+        let spacing = spacing.min(MAX_SDF_RESOLUTION_M);
         format!("use sdf_resolution_m = {spacing:.4} or coarser")
     };
     scene.error(
@@ -488,10 +491,11 @@ pub fn load_warnings(scene: &Scene) -> Vec<String> {
             }
             let across = size / options.particle_distance;
             if size.is_finite() && across < MIN_PARTICLES_ACROSS {
+                // Rounded down, so that the spacing given is one that is not warned.
                 let fix = format!(
                     "use particle_distance_m = {:.3} or less ({MIN_PARTICLES_ACROSS} spacings \
-                     across; the shipped garments use 0.02)",
-                    size / MIN_PARTICLES_ACROSS
+                     across; the shipped garments use 0.005 to 0.035)",
+                    (size / MIN_PARTICLES_ACROSS * 1e3).floor() / 1e3
                 );
                 let problem = format!(
                     "{:.3} m is {across:.1} spacings across a garment {size:.3} m wide: \

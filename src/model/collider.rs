@@ -74,8 +74,10 @@ pub(crate) fn build_collider(
     let bytes = grid_bytes(dims);
     if bytes > settings.sdf_max_bytes {
         // Memory falls with the cube of the spacing.
-        let suggested =
-            settings.sdf_resolution * (bytes as f32 / settings.sdf_max_bytes as f32).cbrt() * 1.05;
+        let suggested = (settings.sdf_resolution
+            * (bytes as f32 / settings.sdf_max_bytes as f32).cbrt()
+            * 1.05)
+            .min(crate::scene::MAX_SDF_RESOLUTION_M as f32);
         return Err(c.err(
             table,
             "sdf_resolution_m",

@@ -104,16 +104,28 @@ pub fn run_scene_of(run: &Path) -> Result<(Option<Scene>, f32), Error> {
 /// A run folder's frames as its summary lists them: frame numbers and files.
 type FrameList = Vec<(u32, PathBuf)>;
 
+/// Whether `run` holds files a run writes before its summary (a run stopped before it
+/// finished).
+fn stopped_run(run: &Path) -> bool {
+    [
+        "frame_0000.obj",
+        crate::run_folder::SCENE_COPY,
+        "checkpoint.bin",
+    ]
+    .iter()
+    .any(|f| run.join(f).is_file())
+}
+
 /// `run_scene_of`, and the frames the summary lists.
 fn run_summary(run: &Path) -> Result<(Option<Scene>, f32, Option<FrameList>), Error> {
     let summary_path = run.join("summary.json");
     let summary: serde_json::Value = std::fs::read(&summary_path)
         .map_err(|e| match e.kind() {
-            // Frames but no summary: a run killed before it finished.
-            std::io::ErrorKind::NotFound if run.join("frame_0000.obj").is_file() => bad(
+            // A run's files but no summary: a run killed before it finished (the scene's
+            // copy is written first; frames only with OBJ output).
+            std::io::ErrorKind::NotFound if stopped_run(run) => bad(
                 &summary_path,
-                "the run in this folder has frames but no summary: it was stopped before it \
-                 finished"
+                "the run in this folder has no summary: it was stopped before it finished"
                     .to_string(),
                 "continue it with drapekit resume (if it wrote a checkpoint) or rerun it; its \
                  frames open in any OBJ viewer meanwhile",

@@ -24,6 +24,9 @@ use summary::Backend;
 /// and returns `Error::Interrupted`.
 pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
+/// Output past which a run says, before it starts, how much it will write: 1 GiB.
+const LARGE_OUTPUT_BYTES: u64 = 1 << 30;
+
 /// Which path runs the simulation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BackendChoice {
@@ -189,18 +192,28 @@ pub fn resume_run(
 ) -> Result<Summary, Error> {
     let checkpoint = Checkpoint::read(dir)?;
     let h = &checkpoint.header;
-    if let Some(f) = frames.filter(|&f| f <= h.frame) {
+    // The run may have gone on past its checkpoint: its summary says how far. Ending sooner
+    // would leave its later frames beside a shorter run's summary.
+    let written = std::fs::read(dir.join("summary.json"))
+        .ok()
+        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+        .and_then(|s| s["frames"].as_u64())
+        .map_or(0, |f| f.min(u32::MAX as u64) as u32);
+    let (reached, least) = (h.frame.max(written), (h.frame + 1).max(written));
+    if let Some(f) = frames.filter(|&f| f < least) {
         return Err(Error::Input(crate::error::InputError::new(
             &dir.join(crate::checkpoint::CHECKPOINT_FILE),
             "--frames",
+            if f >= reached {
+                format!("the run has reached frame {reached}: there is nothing to continue")
+            } else {
+                format!(
+                    "the run has reached frame {reached}: resuming it to {f} frames would end \
+                     it sooner and leave its later frames beside a shorter run's summary"
+                )
+            },
             format!(
-                "{f} frames end at or before the checkpoint's frame {}: there is nothing to \
-                 continue, and its later frames would stay beside a shorter run's summary",
-                h.frame
-            ),
-            format!(
-                "give --frames {} or more, or rerun the scene with drapekit run --frames {f}",
-                h.frame + 1
+                "give --frames {least} or more, or rerun the scene with drapekit run --frames {f}"
             ),
         )));
     }
@@ -226,12 +239,19 @@ pub fn resume_run(
             "restore the scene as it was, or rerun it from the start with drapekit run",
         )));
     }
-    if let Some(path) = h.changed_input(&crate::checkpoint::input_files(&scene)) {
+    let now = crate::checkpoint::input_files(&scene);
+    if let Some(path) = h.changed_input(&now) {
+        let gone = !now.iter().any(|(p, s)| p == path && s != "missing");
         return Err(Error::Input(crate::error::InputError::new(
             Path::new(path),
             "contents",
             format!(
-                "the file changed since the checkpoint in {} was written",
+                "the file {} since the checkpoint in {} was written",
+                if gone {
+                    "cannot be read (moved or deleted?)"
+                } else {
+                    "changed"
+                },
                 dir.display()
             ),
             "restore the file as it was, or rerun the scene from the start with drapekit run",
@@ -515,8 +535,17 @@ fn set_up(
         // The estimate cannot see an OBJ cloth's size; the built model can.
         crate::model::budget::check_model_textures(scene, &prep.model, ctx.max_texels())?;
     }
-    // Refused before anything is simulated or written: the files must fit the disk.
-    crate::export::disk::check_space(scene, &prep, out_dir, from_frame)?;
+    // Refused before anything is simulated or written: the files must fit the disk. A run
+    // that fits but writes gigabytes says so before it starts.
+    let output = crate::export::disk::check_space(scene, &prep, out_dir, from_frame)?;
+    if output.bytes() > LARGE_OUTPUT_BYTES {
+        eprintln!(
+            "drapekit: this run writes about {} ({} frames) into {}",
+            crate::export::disk::size(output.bytes()),
+            output.frames,
+            out_dir.display()
+        );
+    }
     let solver = build_solver(&prep, device.as_ref())?;
     if let Some(note) = &backend_note {
         eprintln!("drapekit: {note}");

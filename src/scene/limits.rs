@@ -397,8 +397,8 @@ pub fn warnings(scene: &Scene) -> Vec<String> {
                 "{ratio:.1e} times the fabric's stretch stiffness: seams that weak never pull \
                  the panels shut"
             ),
-            "leave it out (twice the fabric's stretch stiffness), or use at least a tenth of \
-             the fabric's",
+            "leave it out (twice the fabric's stretch stiffness), or use at least a hundredth \
+             of the fabric's",
         );
     }
     if let Some(ratio) = seam_stiffness_ratio(scene).filter(|&r| r > MAX_SEAM_STIFFNESS_RATIO) {

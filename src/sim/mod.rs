@@ -189,7 +189,9 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
     let mut warnings = Vec::new();
     warnings.extend(metrics::mesh_warnings(&model, garment.is_none()));
     let run_s = s.frames as f32 / s.fps;
-    let wind = scene.wind.map_or(glam::Vec3::ZERO, |w| w.velocity);
+    let wind = scene
+        .wind
+        .map_or((glam::Vec3::ZERO, 0.0), |w| (w.velocity, w.gust_amplitude));
     for (i, apart) in metrics::unreachable_bodies(&model, scene.gravity, wind, run_s) {
         let key = match scene.bodies[i].source {
             crate::scene::BodySource::Mesh { .. } => "offset_m",
@@ -199,7 +201,8 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
             "the body is {apart:.2} m from the cloth and stays there: the cloth cannot reach it \
              in the run's {run_s:.2} s, so it touches nothing"
         );
-        let fix = "place the body where the cloth is, or the cloth where the body is";
+        let fix = "place the body where the cloth is, or the cloth where the body is, or run \
+                   more frames";
         let e = scene.error(&scene.body_table(i), key, problem, fix);
         warnings.push(e.one_line());
     }
@@ -659,14 +662,24 @@ fn explosion_cause(prep: &Prepared) -> Option<String> {
         ));
     }
     let wind = prep.wind.as_ref()?;
-    (prep.dt_limited_by == "wind drag").then(|| {
+    if prep.dt_limited_by != "wind drag" {
+        return None;
+    }
+    let gust = wind.velocity.length() * (1.0 + wind.gust_amplitude);
+    Some(if gust > STORM_WIND_SPEED {
         format!(
-            "chosen for the wind's drag, the wind tore the cloth: wind.velocity_m_s ({:.0} m/s) \
-             is past what cloth survives; give at most a storm's (about 30 m/s)",
-            wind.velocity.length()
+            "chosen for the wind's drag, the wind tore the cloth: its gusts ({gust:.0} m/s) are \
+             past what cloth survives; give at most a storm's (about {STORM_WIND_SPEED:.0} m/s)"
         )
+    } else {
+        "chosen for the wind's drag, the drag tore the cloth: check wind.drag_coefficient and \
+         air_density_kg_m3 (about 1 and 1.2), and the fabric's density_kg_m2"
+            .to_string()
     })
 }
+
+/// A storm's wind, in m/s (force 10 to 11): faster gusts tear cloth apart.
+const STORM_WIND_SPEED: f32 = 30.0;
 
 /// The run-constant parameters after frame `frame`: gravity once its start frame is done, and
 /// the body's static friction once every seam is closed.
