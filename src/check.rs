@@ -47,6 +47,14 @@ fn key_line(src: &str, table: &str, key: &str) -> Option<usize> {
     header_line
 }
 
+/// " in m/s" for a unit, nothing for a dimensionless value.
+fn in_unit(unit: &str) -> String {
+    match unit {
+        "" | "1" | "(dimensionless)" | "dimensionless" => String::new(),
+        u => format!(" in {u}"),
+    }
+}
+
 /// Why a finite `v` cannot become an f32 (the solver's number type), if it cannot: beyond
 /// f32's largest value it would be infinite, and below its smallest normal value it would
 /// keep too few digits, or none.
@@ -142,7 +150,7 @@ impl Checker<'_> {
                 table,
                 key,
                 format!("must be greater than zero, got {v}"),
-                format!("give a positive value in {unit}"),
+                format!("give a positive value{}", in_unit(unit)),
             ));
         }
         Ok(x)
@@ -183,7 +191,7 @@ impl Checker<'_> {
                 table,
                 key,
                 format!("must not be negative, got {v}"),
-                format!("give zero or a positive value in {unit}"),
+                format!("give zero or a positive value{}", in_unit(unit)),
             ));
         }
         Ok(x)
@@ -214,5 +222,22 @@ impl Checker<'_> {
             return Ok(v as u32);
         };
         Err(self.err(table, key, problem, fix))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_dimensionless_value_s_fix_names_no_unit() {
+        let c = Checker {
+            path: std::path::Path::new("scene.toml"),
+            src: "[wind]\ngust_amplitude = -1\n",
+        };
+        let e = c.non_negative("wind", "gust_amplitude", -1.0, "(dimensionless)");
+        assert_eq!(e.unwrap_err().fix, "give zero or a positive value");
+        let e = c.positive("wind", "gust_frequency_hz", 0.0, "Hz");
+        assert_eq!(e.unwrap_err().fix, "give a positive value in Hz");
     }
 }

@@ -66,7 +66,8 @@ impl Manifest {
                 "check the path",
             )
         })?;
-        Manifest::parse(&text, path)
+        // A byte-order mark (some editors write one) is not part of the first line's JSON.
+        Manifest::parse(text.strip_prefix('\u{feff}').unwrap_or(&text), path)
     }
 
     /// Validates manifest text; `path` locates errors and relative scene paths.
@@ -347,6 +348,20 @@ pub fn hex(bytes: &[u8]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_byte_order_mark_before_the_first_line_is_not_json() {
+        // Some editors save UTF-8 with a byte-order mark; scenes read past it, and so does a
+        // manifest. The scene need not exist: the line is refused for it, not for the mark.
+        let dir = std::env::temp_dir().join(format!("drapekit-bom-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("m.jsonl");
+        std::fs::write(&path, "\u{feff}{\"id\": \"a\", \"scene\": \"none.toml\"}\n").unwrap();
+        let e = Manifest::load(&path).unwrap_err().to_string();
+        assert!(!e.contains("not JSON"), "{e}");
+        assert!(e.contains("none.toml"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     #[test]
     fn ids_must_be_safe_folder_names() {

@@ -172,8 +172,8 @@ pub(super) fn parse(
                             return Err(c.err(
                                 &table,
                                 "fold_deg",
-                                format!("{fold}° is not a fold angle"),
-                                "use an angle between -180 and 180 degrees",
+                                format!("{fold}° folds the panels through each other"),
+                                "use an angle above -180 and below 180 degrees",
                             ));
                         }
                         folds.push((stitch, fold.to_radians()));
