@@ -413,6 +413,32 @@ pub fn warnings(scene: &Scene) -> Vec<String> {
              100 times the fabric's",
         );
     }
+    if let ClothSource::Pattern {
+        attach_labels,
+        attach_frames,
+        ..
+    } = &scene.cloth
+    {
+        if *attach_frames > 0 && attach_labels.is_empty() {
+            warn(
+                "cloth.pattern",
+                "attach_frames",
+                format!("{attach_frames} frames of holding, but no attach_labels: nothing is held"),
+                "name the edges to hold with attach_labels, or leave attach_frames out",
+            );
+        } else if !attach_labels.is_empty() && *attach_frames >= scene.solver.frames {
+            warn(
+                "cloth.pattern",
+                "attach_frames",
+                format!(
+                    "{attach_frames} frames is the whole run ({} frames): the labelled edges are \
+                     never let go",
+                    scene.solver.frames
+                ),
+                "hold them for fewer frames than the run, or pin them with [[pins]]",
+            );
+        }
+    }
     if let ClothSource::Pattern { sewing_time, .. } = &scene.cloth {
         if *sewing_time as f64 > run_s {
             warn(
@@ -511,6 +537,28 @@ mod tests {
         // seam_sewing_time_s = 0.6 at 24 fps: 14 frames end at 0.583 s, 15 at 0.625 s.
         assert!(sewing("frames = 14"));
         assert!(!sewing("frames = 15"));
+    }
+
+    #[test]
+    fn holding_nothing_or_holding_for_the_whole_run_is_warned() {
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes/tshirt_drape_cotton.toml");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let warned = |keys: &str| {
+            let with = format!("seam_sewing_time_s = 0.6\n{keys}");
+            let text = text.replace("seam_sewing_time_s = 0.6", &with);
+            let w = warnings(&Scene::parse(&text, &path).unwrap());
+            (w.iter()).find(|w| w.contains("attach_frames")).cloned()
+        };
+        assert_eq!(
+            warned("attach_labels = [\"collar\"]\nattach_frames = 10"),
+            None
+        );
+        let nothing = warned("attach_frames = 10").unwrap();
+        assert!(nothing.contains("nothing is held"), "{nothing}");
+        // The scene runs 240 frames.
+        let always = warned("attach_labels = [\"collar\"]\nattach_frames = 240").unwrap();
+        assert!(always.contains("never let go"), "{always}");
     }
 
     #[test]
