@@ -430,6 +430,33 @@ fn a_body_the_cloth_cannot_reach_in_the_run_is_warned() {
 }
 
 #[test]
+fn panels_placed_far_apart_are_warned_for_their_placement_not_their_unit() {
+    // The two-panel skirt with one panel moved 1 km (in the pattern's centimetres): each panel
+    // is 0.63 m, so the unit is right and the translation is what to check.
+    let work = std::env::temp_dir().join(format!("drapekit-apart-{}", std::process::id()));
+    std::fs::create_dir_all(&work).unwrap();
+    let scene = format!(
+        "[cloth.pattern]\npath = {:?}\nparticle_distance_m = 0.04\n\
+         [cloth.pattern.placement.skirt_front]\ntranslation = [100000.0, 0.0, 0.0]\n\
+         [fabric]\npreset = \"cotton\"\n[solver]\nframes = 1\n",
+        common::fixture("patterns/skirt_2panel.json")
+    );
+    std::fs::write(work.join("s.toml"), scene).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .args(["plan", work.join("s.toml").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("the panels are placed across 100"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("check their translations"), "{stderr}");
+    assert!(!stderr.contains("units_in_meter"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+#[test]
 fn a_long_crossing_outline_is_found_in_seconds() {
     // A thin panel 75 m long that folds over itself at the far end, meshed at 1 mm: 150,000
     // outline particles. Testing every pair of segments took seconds (and 726 s for a typo's

@@ -379,6 +379,19 @@ pub const GARMENT_SIZE_RANGE_M: (f64, f64) = (0.05, 5.0);
 /// particles that keep nothing of its cut.
 pub const MIN_PARTICLES_ACROSS: f64 = 10.0;
 
+/// The largest side of any one panel's own box (before placement), in m.
+fn largest_panel_m(pattern: &Pattern) -> f64 {
+    (pattern.panels.iter())
+        .map(|panel| {
+            let (lo, hi) = (panel.edges.iter()).map(|e| e.curve.bounds()).fold(
+                (glam::DVec2::INFINITY, glam::DVec2::NEG_INFINITY),
+                |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
+            );
+            (hi - lo).max_element() / pattern.units_in_meter
+        })
+        .fold(0.0, f64::max)
+}
+
 /// The largest side of the box around the pattern's placed panels, in m.
 fn garment_span(pattern: &Pattern, options: &GarmentOptions) -> f64 {
     let boxes = panel_reach(pattern, options);
@@ -479,7 +492,16 @@ pub fn load_warnings(scene: &Scene) -> Vec<String> {
         if let Ok(pattern) = Pattern::load(path) {
             let size = garment_span(&pattern, options);
             let (small, large) = GARMENT_SIZE_RANGE_M;
-            if !in_garment_range(size) {
+            let largest_panel = largest_panel_m(&pattern);
+            if size > large && in_garment_range(largest_panel) {
+                // Each panel is garment-sized: it is where they are placed that is not.
+                out.push(format!(
+                    "{}: the panels are placed across {size:.3} m, though the largest is \
+                     {largest_panel:.3} m: check their translations (in the pattern, or \
+                     [cloth.pattern.placement])",
+                    path.display()
+                ));
+            } else if !in_garment_range(size) {
                 out.push(format!(
                     "{}: with units_in_meter = {} the garment spans {size:.3} m, {} than any \
                      garment ({small} to {large} m): check properties.units_in_meter (100 for \
