@@ -457,6 +457,40 @@ fn panels_placed_far_apart_are_warned_for_their_placement_not_their_unit() {
 }
 
 #[test]
+fn a_self_collision_layer_of_metres_is_blamed_when_the_cloth_flies_apart() {
+    // A 10 m self-collision thickness on a 0.5 m cloth of 7 cm edges: every particle repels
+    // every other, the first frame tears it, and the advice names the thickness (it is
+    // warned before the run too), not the substep.
+    let work = std::env::temp_dir().join(format!("drapekit-selfthick-{}", std::process::id()));
+    std::fs::create_dir_all(&work).unwrap();
+    std::fs::write(
+        work.join("s.toml"),
+        "[cloth.grid]\nwidth_m = 0.5\nheight_m = 0.5\ncolumns = 8\nrows = 8\n\
+         [fabric]\npreset = \"cotton\"\n[self_collision]\nthickness_m = 10\n\
+         [solver]\nframes = 2\n[output]\nobj = false\n",
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .args([
+            "run",
+            work.join("s.toml").to_str().unwrap(),
+            "--backend",
+            "cpu",
+        ])
+        .args(["--out", work.join("out").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    let stopped = stderr.find("simulation stopped").expect("the run stops");
+    assert!(
+        stderr[stopped..].contains("self-collision pushed the cloth apart"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+#[test]
 fn a_long_crossing_outline_is_found_in_seconds() {
     // A thin panel 75 m long that folds over itself at the far end, meshed at 1 mm: 150,000
     // outline particles. Testing every pair of segments took seconds (and 726 s for a typo's

@@ -661,6 +661,17 @@ fn explosion_cause(prep: &Prepared) -> Option<String> {
              is {r:.0} times the fabric's stretch stiffness; leave it out (twice the fabric's)"
         ));
     }
+    let springs = &prep.model.springs;
+    let mean_edge =
+        springs.iter().map(|s| s.rest_length).sum::<f32>() / springs.len().max(1) as f32;
+    let thickness = prep.params.self_thickness;
+    if prep.plan.contains(crate::plan::Pass::SelfCollide) && thickness > 2.0 * mean_edge {
+        return Some(format!(
+            "self-collision pushed the cloth apart: self_collision.thickness_m ({thickness} m) \
+             is {:.0} times the mean edge; leave it out (0.75 times the edge)",
+            thickness / mean_edge
+        ));
+    }
     let wind = prep.wind.as_ref()?;
     if prep.dt_limited_by != "wind drag" {
         return None;
