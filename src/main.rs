@@ -516,7 +516,7 @@ fn execute(command: Command) -> Result<(), Error> {
             turntable,
             out,
         } => {
-            if let Some(c) = checker.filter(|c| !(c.is_finite() && *c > 0.0 && *c <= 10.0)) {
+            if let Some(c) = checker.filter(|c| !(c.is_finite() && (1e-3..=10.0).contains(c))) {
                 return Err(Error::Input(drapekit::error::InputError::new(
                     std::path::Path::new("--checker"),
                     "",

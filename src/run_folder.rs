@@ -116,6 +116,9 @@ pub fn check(dir: &Path, scene: &Scene, overwrite: bool) -> Result<Vec<PathBuf>,
         .count();
     let whose = match &previous {
         Some(p) => format!("a run of {}", p.display()),
+        None if dir.join("summary.json").is_file() => {
+            "a run whose summary.json does not read".to_string()
+        }
         None => "a run that left no summary.json".to_string(),
     };
     Err(Error::Input(InputError::new(

@@ -356,3 +356,18 @@ fn a_run_stopped_before_its_summary_is_named_as_such() {
     assert!(stderr.contains("drapekit resume"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_checker_outside_its_stated_range_is_refused() {
+    // 0.001 to 10 m, as the message and the scene's checker_m say: 0.0009 and 1e-9 were let
+    // through (a checker finer than a pixel). Refused before the run folder is read.
+    for bad in ["0.0009", "1e-9", "11", "NaN"] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_drapekit"))
+            .args(["preview", "no-such-run", "--checker", bad, "--out", "x.png"])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{bad}: {stderr}");
+        assert!(stderr.contains("from 0.001 to 10"), "{bad}: {stderr}");
+    }
+}

@@ -181,4 +181,13 @@ fn frames_without_a_summary_are_kept_unless_overwrite() {
     assert_eq!(r.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&r.stderr).contains("a run that left no summary.json"));
     assert!(out.join("frame_0007.obj").is_file());
+    // A summary that does not read is not "no summary".
+    std::fs::write(out.join("summary.json"), "{\"scene\": ").unwrap();
+    let r = common::drapekit(&args);
+    assert_eq!(r.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        stderr.contains("a run whose summary.json does not read"),
+        "{stderr}"
+    );
 }
