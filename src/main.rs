@@ -296,6 +296,14 @@ fn main() -> ExitCode {
         );
         return ExitCode::from(2);
     }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if let Some(n) = cli.threads.filter(|&n| n as usize > 4 * cores) {
+        // Results do not depend on it, but threads past the cores only take turns.
+        eprintln!(
+            "drapekit: note: --threads {n} on {cores} logical CPUs: the threads take turns, and \
+             the CPU backend runs slower than with --threads {cores}"
+        );
+    }
     let result = match cli.command {
         command @ Command::Batch(_) => execute(command),
         command => rayon::scope(|_| execute(command)),

@@ -134,3 +134,21 @@ fn backend_auto_prefers_the_cpu_path_to_a_software_adapter() {
         assert!(note.contains("CPU path"), "{note}");
     }
 }
+
+#[test]
+fn far_more_threads_than_cores_are_noted() {
+    // 4096 threads on a 2-core machine took 11 s for what 2 do in 0.07 s: said, not refused
+    // (results do not depend on it). Five times the cores, whatever the machine.
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let many = (5 * cores).min(4096).to_string();
+    let r = std::process::Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .args(["--threads", &many, "info"])
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        stderr.contains(&format!("--threads {many} on {cores} logical CPUs")),
+        "{stderr}"
+    );
+}
