@@ -27,7 +27,14 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
         });
     }
     let n = NEXT.fetch_add(1, Ordering::Relaxed);
-    let tmp = dir.join(format!(".{name}.{}.{n}{TEMP_SUFFIX}", std::process::id()));
+    // File names end at 255 bytes: the temporary name keeps the start of a long one, so that
+    // a name near the limit can still be written.
+    let mut end = name.len().min(TEMP_NAME_BYTES);
+    while !name.is_char_boundary(end) {
+        end -= 1;
+    }
+    let short = &name[..end];
+    let tmp = dir.join(format!(".{short}.{}.{n}{TEMP_SUFFIX}", std::process::id()));
     let written = write_file(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
     written.map_err(|source| {
         let _ = std::fs::remove_file(&tmp);
@@ -38,6 +45,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
         }
     })
 }
+
+/// The most bytes of the file's name a temporary name keeps: with the dot, process id, counter
+/// and suffix (at most 1 + 1 + 10 + 1 + 20 + 4 bytes) it stays within 255.
+const TEMP_NAME_BYTES: usize = 200;
 
 /// How `write_atomic`'s temporary files end: `.NAME.PID.N.tmp`.
 const TEMP_SUFFIX: &str = ".tmp";
@@ -116,6 +127,19 @@ mod tests {
         ] {
             assert!(!is_temporary(other), "{other}");
         }
+    }
+
+    #[test]
+    fn a_name_at_the_file_system_s_limit_is_written() {
+        // 255 bytes, with a two-byte character across the cut: the temporary name keeps the
+        // start of it, on a character boundary.
+        let dir = std::env::temp_dir().join(format!("drapekit-long-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let name = format!("{}é{}.png", "a".repeat(199), "b".repeat(50));
+        assert_eq!(name.len(), 255);
+        write_atomic(&dir.join(&name), b"png").unwrap();
+        assert_eq!(std::fs::read(dir.join(&name)).unwrap(), b"png");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[cfg(unix)]
