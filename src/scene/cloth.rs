@@ -167,6 +167,14 @@ pub(super) fn parse(
                     for (k, seam) in p.seams.iter().enumerate() {
                         let table = format!("cloth.pattern.seams[{k}]");
                         let stitch = c.count(&table, "stitch", seam.stitch, 0)? as usize;
+                        if let Some(j) = p.seams[..k].iter().position(|s| s.stitch == seam.stitch) {
+                            return Err(c.err(
+                                &table,
+                                "stitch",
+                                format!("stitch {stitch} is given a fold already, in seams[{j}]"),
+                                "give each stitch one [[cloth.pattern.seams]] entry",
+                            ));
+                        }
                         let fold = c.finite(&table, "fold_deg", seam.fold_deg)?;
                         if fold.abs() >= 180.0 {
                             return Err(c.err(
