@@ -491,6 +491,51 @@ fn a_self_collision_layer_of_metres_is_blamed_when_the_cloth_flies_apart() {
 }
 
 #[test]
+fn a_shape_thinner_than_its_distance_field_s_spacing_is_warned() {
+    // A sphere of radius 1 µm under the default 1 cm field: nothing for the cloth to meet. At
+    // 2 cm across (radius 1 cm) it is resolved.
+    let work = std::env::temp_dir().join(format!("drapekit-thin-{}", std::process::id()));
+    std::fs::create_dir_all(&work).unwrap();
+    let warned = |radius: &str| {
+        std::fs::write(
+            work.join("s.toml"),
+            format!(
+                "[cloth.grid]\nwidth_m = 0.5\nheight_m = 0.5\ncolumns = 6\nrows = 6\n\
+                 center_m = [0.0, 0.1, 0.0]\n[fabric]\npreset = \"cotton\"\n[body]\n\
+                 shape = \"sphere\"\nradius_m = {radius}\n[solver]\nframes = 1\n\
+                 [output]\nobj = false\n"
+            ),
+        )
+        .unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
+            .args([
+                "run",
+                work.join("s.toml").to_str().unwrap(),
+                "--backend",
+                "cpu",
+            ])
+            .args([
+                "--quiet",
+                "--overwrite",
+                "--out",
+                work.join("out").to_str().unwrap(),
+            ])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert_eq!(out.status.code(), Some(0), "{stderr}");
+        stderr.contains("thick at its thinnest").then_some(stderr)
+    };
+    let tiny = warned("1e-6").expect("warned");
+    assert!(
+        tiny.contains("s.toml:11: body.radius_m: the shape is 2.000e-6 m thick"),
+        "{tiny}"
+    );
+    assert_eq!(warned("0.01"), None);
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+#[test]
 fn a_long_crossing_outline_is_found_in_seconds() {
     // A thin panel 75 m long that folds over itself at the far end, meshed at 1 mm: 150,000
     // outline particles. Testing every pair of segments took seconds (and 726 s for a typo's

@@ -114,6 +114,22 @@ pub fn scene_warnings(scene: &Scene) -> Result<Vec<String>, crate::InputError> {
 pub fn input_warnings(scene: &Scene, bodies: &[Body]) -> Vec<String> {
     let mut out = fabric_warnings(scene, &scene.fabric);
     for (i, (body, settings)) in bodies.iter().zip(&scene.bodies).enumerate() {
+        if let Some((key, size)) = thinnest_shape(&settings.source) {
+            if size < settings.sdf_resolution {
+                let problem = format!(
+                    "the shape is {size:.3e} m thick at its thinnest, less than its \
+                     sdf_resolution_m = {} m: its distance field cannot resolve it, and the \
+                     cloth may pass through",
+                    settings.sdf_resolution
+                );
+                let fix = "check its size, or use an sdf_resolution_m of a fifth of it";
+                out.push(
+                    scene
+                        .error(&scene.body_table(i), key, problem, fix)
+                        .one_line(),
+                );
+            }
+        }
         // Shapes are given in metres by their keys; only a mesh file has a unit to get wrong.
         let BodySource::Mesh { scale, .. } = &settings.source else {
             continue;
@@ -124,6 +140,17 @@ pub fn input_warnings(scene: &Scene, bodies: &[Body]) -> Vec<String> {
         }
     }
     out
+}
+
+/// A shape body's key for its thinnest size and that size (a diameter or a box's side), in m.
+fn thinnest_shape(source: &BodySource) -> Option<(&'static str, f32)> {
+    match source {
+        BodySource::Sphere { radius, .. } | BodySource::Capsule { radius, .. } => {
+            Some(("radius_m", 2.0 * radius))
+        }
+        BodySource::Cuboid { half, .. } => Some(("half_extents_m", 2.0 * half.min_element())),
+        _ => None,
+    }
 }
 
 /// A stiffening membrane whose large-strain stiffness is below its small-strain one softens as
