@@ -401,6 +401,30 @@ fn a_folder_or_file_of_the_user_s_with_an_item_s_name_is_never_replaced() {
 }
 
 #[test]
+fn an_item_s_warnings_name_the_item() {
+    // Items run side by side and their stderr lines interleave: each warning says whose it is.
+    let dir = workdir("warned");
+    write_scene(&dir, "sheet.toml", 2);
+    let manifest = dir.join("manifest.jsonl");
+    std::fs::write(
+        &manifest,
+        r#"{"id": "creeping", "scene": "scenes/sheet.toml", "overrides": {"fabric": {"damping_ratio": 20.0}}}"#,
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let r = batch(&[
+        manifest.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--backend",
+        "cpu",
+    ]);
+    let log = text(&r);
+    assert!(r.status.success(), "{log}");
+    assert!(log.contains("warning: item creeping: "), "{log}");
+}
+
+#[test]
 fn the_report_names_a_damaged_item_and_leaves_out_what_is_not_an_item() {
     let dir = workdir("report-damaged");
     write_scene(&dir, "sheet.toml", 2);

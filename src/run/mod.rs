@@ -24,6 +24,28 @@ use summary::Backend;
 /// and returns `Error::Interrupted`.
 pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
+thread_local! {
+    /// The batch item this thread runs, if any: its warnings name it, since items run side
+    /// by side and their lines interleave.
+    static ITEM: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `f` with this thread's warnings labelled as batch item `id`'s.
+pub fn as_item<T>(id: &str, f: impl FnOnce() -> T) -> T {
+    ITEM.with(|item| *item.borrow_mut() = Some(id.to_string()));
+    let out = f();
+    ITEM.with(|item| *item.borrow_mut() = None);
+    out
+}
+
+/// A warning on stderr, with the batch item it belongs to.
+fn warn(w: &str) {
+    ITEM.with(|item| match &*item.borrow() {
+        Some(id) => eprintln!("drapekit: warning: item {id}: {w}"),
+        None => eprintln!("drapekit: warning: {w}"),
+    });
+}
+
 /// Output past which a run says, before it starts, how much it will write: 1 GiB.
 const LARGE_OUTPUT_BYTES: u64 = 1 << 30;
 
@@ -463,7 +485,7 @@ fn run_scene_from(
     // The caches hold the frames written so far, also when the run stopped early.
     outputs.extend(exporter.finish()?);
     for w in &exporter.warnings {
-        eprintln!("drapekit: warning: {w}");
+        warn(w);
     }
     warnings.append(&mut exporter.warnings);
     if result.is_ok() && previews.wanted() {
@@ -517,12 +539,12 @@ fn set_up(
     // size is refused) and before the long part of the run.
     let input_warnings = crate::health::scene_warnings(scene)?;
     for w in &input_warnings {
-        eprintln!("drapekit: warning: {w}");
+        warn(w);
     }
     // Values that compute but no real scene has: said before anything slow starts.
     let load_warnings = crate::model::budget::load_warnings(scene);
     for w in &load_warnings {
-        eprintln!("drapekit: warning: {w}");
+        warn(w);
     }
     let (device, backend_note) = choose_device(opts.backend, &opts.adapter)?;
     if let Some(ctx) = &device {
@@ -560,7 +582,7 @@ fn set_up(
         );
     }
     for w in &warnings {
-        eprintln!("drapekit: warning: {w}");
+        warn(w);
     }
     warnings.splice(0..0, input_warnings.into_iter().chain(load_warnings));
     Ok(SetUp {
