@@ -371,3 +371,48 @@ fn a_checker_outside_its_stated_range_is_refused() {
         assert!(stderr.contains("from 0.001 to 10"), "{bad}: {stderr}");
     }
 }
+
+#[test]
+fn a_frame_0_of_another_cloth_is_named_as_such_for_strain() {
+    // Frame 0 with one vertex more than the frame drawn: the folder mixes two runs' frames.
+    // It used to say to rerun so that frame 0 is written, though it was there.
+    let dir = std::env::temp_dir().join(format!("drapekit-mixed-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .args([
+            "run",
+            "--backend",
+            "cpu",
+            "--quiet",
+            "--frames",
+            "2",
+            "--out",
+        ])
+        .arg(&dir)
+        .arg(common::fixture("scenes/hanging_cloth.toml"))
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let first = dir.join("frame_0000.obj");
+    let text = std::fs::read_to_string(&first).unwrap();
+    std::fs::write(&first, format!("v 0 0 0\n{text}")).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .args([
+            "preview",
+            dir.to_str().unwrap(),
+            "--mode",
+            "strain",
+            "--out",
+        ])
+        .arg(dir.join("p.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("they are not one run's"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

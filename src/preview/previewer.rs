@@ -191,11 +191,23 @@ impl<'a> Previewer<'a> {
             self.rest = Some(rest);
         }
         let rest = self.rest.as_deref().unwrap_or_default();
-        if rest.len() != particles {
+        if rest.is_empty() {
             return Err(bad(
                 &self.run,
                 "strain colours need frame 0 (frame_0000.obj) as the rest shape",
                 "rerun the scene so that frame 0 is written (it always is with OBJ frames on)",
+            ));
+        }
+        if rest.len() != particles {
+            // Frame 0 is there, but of another cloth: the folder mixes two runs' frames.
+            return Err(bad(
+                &self.run.join("frame_0000.obj"),
+                format!(
+                    "frame 0 has {} vertices and this frame {particles}: they are not one run's, \
+                     so frame 0 is no rest shape for its strain",
+                    rest.len()
+                ),
+                "rerun the scene into an empty folder (or with --overwrite)",
             ));
         }
         Ok(rest)
