@@ -47,6 +47,16 @@ fn key_line(src: &str, table: &str, key: &str) -> Option<usize> {
     header_line
 }
 
+/// `v` as people read it: very small and very large values in scientific notation (1e-30, not
+/// thirty zeros).
+fn shown(v: f64) -> String {
+    if v != 0.0 && !(1e-3..1e7).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 /// " in m/s" for a unit, nothing for a dimensionless value.
 fn in_unit(unit: &str) -> String {
     match unit {
@@ -149,7 +159,7 @@ impl Checker<'_> {
             return Err(self.err(
                 table,
                 key,
-                format!("must be greater than zero, got {v}"),
+                format!("must be greater than zero, got {}", shown(v)),
                 format!("give a positive value{}", in_unit(unit)),
             ));
         }
@@ -170,7 +180,10 @@ impl Checker<'_> {
             return Err(self.err(
                 table,
                 key,
-                format!("{v} {unit} is outside the sensible range {lo} to {hi} {unit}"),
+                format!(
+                    "{} {unit} is outside the sensible range {lo} to {hi} {unit}",
+                    shown(v)
+                ),
                 format!("give a value from {lo} to {hi} {unit}"),
             ));
         }
@@ -190,7 +203,7 @@ impl Checker<'_> {
             return Err(self.err(
                 table,
                 key,
-                format!("must not be negative, got {v}"),
+                format!("must not be negative, got {}", shown(v)),
                 format!("give zero or a positive value{}", in_unit(unit)),
             ));
         }
@@ -239,5 +252,13 @@ mod tests {
         assert_eq!(e.unwrap_err().fix, "give zero or a positive value");
         let e = c.positive("wind", "gust_frequency_hz", 0.0, "Hz");
         assert_eq!(e.unwrap_err().fix, "give a positive value in Hz");
+    }
+
+    #[test]
+    fn tiny_and_huge_values_are_written_in_scientific_notation() {
+        assert_eq!(shown(-1e-30), "-1e-30");
+        assert_eq!(shown(2.5e12), "2.5e12");
+        assert_eq!(shown(0.05), "0.05");
+        assert_eq!(shown(0.0), "0");
     }
 }
