@@ -9,6 +9,9 @@ use std::path::Path;
 /// Where to look for every key, its unit and default.
 const FORMAT_DOC: &str = "docs/src/scenes.md";
 
+/// The scene's top-level tables without a default (`RawScene`'s required fields).
+const REQUIRED_TABLES: [&str; 3] = ["cloth", "fabric", "solver"];
+
 /// `err`, from reading `src` (the text of `path`), as an error a user can act on.
 pub fn describe(path: &Path, src: &str, err: &toml::de::Error) -> InputError {
     let start = err.span().map(|s| {
@@ -18,9 +21,11 @@ pub fn describe(path: &Path, src: &str, err: &toml::de::Error) -> InputError {
         }
         start
     });
+    let message = err.message().trim();
+    // A required table's absence belongs to no line.
+    let start = start.filter(|_| !missing_table(message));
     let line = start.map(|s| src[..s].matches('\n').count() + 1);
     let place = start.map_or_else(Place::default, |s| Place::of(src, s));
-    let message = err.message().trim();
     let (location, problem, fix) = explain(message, &place);
     InputError::new(path, location, problem, fix).at_line(line)
 }
@@ -106,6 +111,14 @@ fn header_name(line: &str) -> Option<(String, bool)> {
     Some((name.join("."), is_array))
 }
 
+/// Whether `message` says that one of the scene's required tables is missing. serde reports
+/// it against the whole document, whose span starts on the first line, whatever table that
+/// line opens (a scene starting `[cloth.grid]` without `[solver]` read "cloth.grid: the required
+/// key `solver` is missing").
+fn missing_table(message: &str) -> bool {
+    between(message, "missing field `", "`").is_some_and(|k| REQUIRED_TABLES.contains(&k))
+}
+
 /// Location, problem and fix for one of serde's messages.
 fn explain(message: &str, place: &Place) -> (String, String, String) {
     if let Some((word, choices)) = unknown(message, "unknown field") {
@@ -136,6 +149,13 @@ fn explain(message: &str, place: &Place) -> (String, String, String) {
         }
     }
     if let Some(key) = between(message, "missing field `", "`") {
+        if missing_table(message) {
+            return (
+                String::new(),
+                format!("the required table [{key}] is missing"),
+                format!("add a [{key}] table (see {FORMAT_DOC})"),
+            );
+        }
         let table = if place.on_header {
             place.dotted(&place.key)
         } else {
@@ -341,6 +361,17 @@ mod tests {
             .map(|l| l.len() + 1)
             .sum::<usize>()
             + column
+    }
+
+    #[test]
+    fn a_missing_table_is_named_as_a_table_on_no_line() {
+        let src = "[cloth.grid]\nwidth_m = 1.0\nheight_m = 1.0\ncolumns = 3\nrows = 3\n\
+                   [fabric]\npreset = \"cotton\"\n";
+        let err = crate::scene::Scene::parse(src, Path::new("s.toml")).unwrap_err();
+        assert_eq!(err.location, "");
+        assert_eq!(err.problem, "the required table [solver] is missing");
+        assert!(err.fix.starts_with("add a [solver] table"), "{}", err.fix);
+        assert!(!err.to_string().contains("s.toml:1"), "{err}");
     }
 
     #[test]
