@@ -3,7 +3,7 @@
 //! anything runs, and every bad line is reported at once: a cluster job that fails on item
 //! 9,000 of 10,000 for a typo costs hours.
 
-use super::overrides;
+use super::{overrides, unique_keys};
 use crate::error::InputError;
 use crate::scene::{BodySource, ClothSource, Scene};
 use serde_json::Value;
@@ -44,6 +44,8 @@ pub struct Item {
     /// SHA-256 over the item's inputs: its line (canonical JSON), the scene's text and the
     /// contents of every file it reads. The batch adds drapekit's version and its options.
     pub inputs_sha256: String,
+    /// What looks wrong in the item but runs (`overrides::merge`'s warnings).
+    pub warnings: Vec<String>,
 }
 
 /// A validated manifest.
@@ -142,6 +144,12 @@ fn parse_line(
     const FIX_SHAPE: &str = "write {\"id\": \"…\", \"scene\": \"path.toml\", \"overrides\": {…}}";
     let value: Value = serde_json::from_str(line)
         .map_err(|e| format!("not JSON ({e})\n    fix: {FIX_SHAPE} on one line"))?;
+    if let Some(repeat) = unique_keys::first_duplicate(line) {
+        return Err(format!(
+            "{repeat}; JSON keeps only the last, so the first would be dropped unread\n    \
+             fix: write each key once (merge the two objects)"
+        ));
+    }
     let Value::Object(obj) = &value else {
         return Err(format!("not a JSON object\n    fix: {FIX_SHAPE}"));
     };
@@ -185,7 +193,7 @@ fn parse_line(
             scene_path.display()
         )
     })?;
-    let (scene, table) = load_scene(&src, &scene_path, &overrides).map_err(|e| {
+    let (scene, table, warnings) = load_scene(&src, &scene_path, &overrides).map_err(|e| {
         let lines: Vec<&str> = e.lines().map(str::trim_start).collect();
         format!("item {id:?}: {}", lines.join("\n    "))
     })?;
@@ -250,16 +258,18 @@ fn parse_line(
         particle_distance_m,
         files: hashed,
         inputs_sha256: hex(&hasher.finalize()),
+        warnings,
     })
 }
 
-/// The scene with `overrides` merged into its tables, validated, and the merged TOML table.
-/// Without overrides the file's own text is validated, so errors point at its lines.
+/// The scene with `overrides` merged into its tables, validated, the merged TOML table and the
+/// merge's warnings. Without overrides the file's own text is validated, so errors point at its
+/// lines.
 fn load_scene(
     src: &str,
     path: &Path,
     overrides: &serde_json::Map<String, Value>,
-) -> Result<(Scene, toml::Table), String> {
+) -> Result<(Scene, toml::Table, Vec<String>), String> {
     let mut table: toml::Table = match toml::from_str(src) {
         Ok(t) => t,
         // Let the scene parser word the syntax error, with its line.
@@ -271,9 +281,10 @@ fn load_scene(
         }
     };
     if overrides.is_empty() {
-        return Ok((Scene::parse(src, path).map_err(|e| e.to_string())?, table));
+        let scene = Scene::parse(src, path).map_err(|e| e.to_string())?;
+        return Ok((scene, table, Vec::new()));
     }
-    overrides::merge(&mut table, overrides, "")
+    let warnings = overrides::merge(&mut table, overrides, "")
         .map_err(|e| format!("overrides: {e}\n  fix: see \"overrides\" in docs/src/batches.md"))?;
     let merged = toml::to_string(&table).map_err(|e| format!("overrides: {e}"))?;
     // Relative paths in the scene (and in overrides) still resolve against the scene file.
@@ -290,7 +301,7 @@ fn load_scene(
             e.fix
         )
     })?;
-    Ok((scene, table))
+    Ok((scene, table, warnings))
 }
 
 /// Why an id cannot be a folder name, if it cannot.

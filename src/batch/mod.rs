@@ -14,6 +14,7 @@ pub mod origin;
 pub mod overrides;
 pub mod report;
 pub mod shard;
+mod unique_keys;
 
 pub use item::{ItemOptions, Outcome};
 pub use manifest::{Item, Manifest};
@@ -108,6 +109,16 @@ pub fn run(
         .map_err(|e| InputError::new(cli, "--shard", e, "see `drapekit batch --help`"))?;
     let jobs_wanted = jobs(opts.jobs, opts.item.backend)?;
     let manifest = Manifest::load(&opts.manifest)?;
+    for item in &manifest.items {
+        for w in &item.warnings {
+            eprintln!(
+                "drapekit: warning: {} line {}, item {}: {w}",
+                manifest.path.display(),
+                item.line,
+                item.id
+            );
+        }
+    }
     let mine: Vec<&Item> = (manifest.items.iter())
         .filter(|it| shard.owns(it.index))
         .collect();

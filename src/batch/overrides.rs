@@ -6,18 +6,32 @@ use serde_json::Value;
 
 /// Applies `patch` to `table`: objects merge key by key, `null` removes a key (e.g. a fixed
 /// density that would otherwise override a new `fabric.preset`), anything else replaces.
-/// `at` is the dotted key path of `table`, for messages.
+/// `at` is the dotted key path of `table`, for messages. Returns a warning for each null that
+/// removed nothing (the merge patch allows it, but it is how a key put in the wrong table
+/// looks: `"frames": null` for `solver.frames`) or a whole table (every key in it falls back
+/// to its default, which a null meant for one key of it does by surprise).
 pub fn merge(
     table: &mut toml::Table,
     patch: &serde_json::Map<String, Value>,
     at: &str,
-) -> Result<(), String> {
+) -> Result<Vec<String>, String> {
+    let mut warnings = Vec::new();
     for (key, value) in patch {
         let path = dotted(at, key);
         match value {
-            Value::Null => {
-                table.remove(key);
-            }
+            Value::Null => match table.remove(key) {
+                None => warnings.push(format!(
+                    "overrides: {path} is null, but the scene has no {path}, so it removes \
+                     nothing; check which table the key belongs to"
+                )),
+                Some(toml::Value::Table(t)) => warnings.push(format!(
+                    "overrides: {path} is null, which removes the scene's whole [{path}] \
+                     table ({} keys): each takes its default; to remove one key, write \
+                     {{\"{key}\": {{\"KEY\": null}}}}",
+                    t.len()
+                )),
+                Some(_) => {}
+            },
             Value::Object(inner) => {
                 if !table.get(key).is_some_and(|v| v.is_table()) {
                     table.insert(key.clone(), toml::Value::Table(toml::Table::new()));
@@ -25,14 +39,14 @@ pub fn merge(
                 let Some(toml::Value::Table(sub)) = table.get_mut(key) else {
                     unreachable!("inserted above")
                 };
-                merge(sub, inner, &path)?;
+                warnings.extend(merge(sub, inner, &path)?);
             }
             other => {
                 table.insert(key.clone(), to_toml(other, &path)?);
             }
         }
     }
-    Ok(())
+    Ok(warnings)
 }
 
 /// A JSON value as TOML. TOML has no null, so a null inside an array or a new table is an
@@ -109,7 +123,8 @@ mod tests {
             "cloth": {"pattern": {"particle_distance_m": 0.03}},
             "solver": {"frames": 2}
         });
-        merge(&mut table, patch.as_object().unwrap(), "").unwrap();
+        let warnings = merge(&mut table, patch.as_object().unwrap(), "").unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
         let expect: toml::Table = toml::from_str(
             "[fabric]\npreset = \"denim\"\n\
              [cloth.pattern]\npath = \"p.json\"\nparticle_distance_m = 0.03\n\
@@ -117,6 +132,27 @@ mod tests {
         )
         .unwrap();
         assert_eq!(table, expect);
+    }
+
+    #[test]
+    fn warns_of_nulls_that_remove_nothing_or_a_whole_table() {
+        let mut table: toml::Table =
+            toml::from_str("[solver]\nframes = 48\nsubsteps = 8\n").unwrap();
+        let patch = serde_json::json!({"frames": null});
+        let warnings = merge(&mut table, patch.as_object().unwrap(), "").unwrap();
+        assert_eq!(warnings.len(), 1);
+        assert!(
+            warnings[0].contains("no frames, so it removes nothing"),
+            "{warnings:?}"
+        );
+        let patch = serde_json::json!({"solver": null});
+        let warnings = merge(&mut table, patch.as_object().unwrap(), "").unwrap();
+        assert_eq!(warnings.len(), 1);
+        assert!(
+            warnings[0].contains("whole [solver] table (2 keys)"),
+            "{warnings:?}"
+        );
+        assert!(table.is_empty());
     }
 
     #[test]
