@@ -25,6 +25,7 @@ pub mod health;
 pub mod mesh;
 pub mod metrics;
 pub mod model;
+pub mod notice;
 pub mod output;
 pub mod pattern;
 pub mod plan;

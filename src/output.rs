@@ -9,6 +9,9 @@ use serde::Serialize;
 pub struct Summary {
     /// The scene file, as an absolute path (its text is `scene.toml` in the output folder).
     pub scene: String,
+    /// SHA-256 of the scene's text as the run read it (`scene.toml`), so that a preview can
+    /// tell when that copy was edited afterwards.
+    pub scene_sha256: String,
     /// Every file the run read, as absolute paths.
     pub inputs: crate::run_folder::Inputs,
     /// "cpu" or "gpu".

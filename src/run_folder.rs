@@ -6,6 +6,7 @@ use crate::atomic_file::write_atomic;
 use crate::error::{Error, InputError};
 use crate::scene::{BodySource, ClothSource, Scene};
 use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
 use std::path::{Path, PathBuf};
 
 /// The scene's text as the run read it, in the run folder.
@@ -144,11 +145,11 @@ pub fn clear(dir: &Path, old: &[PathBuf]) -> Result<(), Error> {
         }
     }
     if !old.is_empty() {
-        eprintln!(
-            "drapekit: replaced the {} files of the previous run in {}",
+        crate::notice::note(&format!(
+            "replaced the {} files of the previous run in {}",
             old.len(),
             dir.display()
-        );
+        ));
     }
     Ok(())
 }
@@ -176,15 +177,39 @@ pub fn run_scene(run: &Path, summary: &serde_json::Value) -> Result<Option<Scene
     };
     let copy = run.join(SCENE_COPY);
     match std::fs::read_to_string(&copy) {
-        Ok(text) => Ok(Some(Scene::parse(&text, &original).map_err(|e| {
-            // Errors name the copy the user can open, not the original path.
-            Error::Input(InputError {
-                file: copy.clone(),
-                ..e
-            })
-        })?)),
+        Ok(text) => {
+            warn_if_edited(&copy, &text, summary);
+            Ok(Some(Scene::parse(&text, &original).map_err(|e| {
+                // Errors name the copy the user can open, not the original path.
+                Error::Input(InputError {
+                    file: copy.clone(),
+                    ..e
+                })
+            })?))
+        }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Some(Scene::load(&original)?)),
         Err(e) => Err(Error::io(&copy, e)),
+    }
+}
+
+/// SHA-256 of a text, in hex.
+pub fn text_sha256(text: &str) -> String {
+    format!("{:x}", Sha256::digest(text.as_bytes()))
+}
+
+/// Warns when the run folder's scene copy is not the text the run read (the summary's
+/// `scene_sha256`; summaries written before it had none): a preview then draws the edited
+/// scene's bodies, seams and fabric around frames simulated with the old ones.
+fn warn_if_edited(copy: &Path, text: &str, summary: &serde_json::Value) {
+    if let Some(ran) = summary["scene_sha256"].as_str() {
+        if ran != text_sha256(text) {
+            crate::notice::warn(&format!(
+                "{} was edited after the run: the preview draws the edited scene's bodies, \
+                 seams and fabric around frames simulated with the scene as it was; rerun \
+                 the scene to simulate the edit",
+                copy.display()
+            ));
+        }
     }
 }
 

@@ -129,6 +129,7 @@ fn a_bad_manifest_reports_every_bad_line_and_runs_nothing() {
         "",
         r#"{"id": "zero-rows", "scene": "scenes/sheet.toml", "overrides": {"cloth": {"grid": {"rows": 1}}}}"#,
         r#"{"id": "fine", "scene": "scenes/sheet.toml", "overrides": {"solver": {"frames": 1}}}"#,
+        r#"{"id": "twice", "scene": "scenes/sheet.toml", "overrides": {"solver": {"frames": 1}, "solver": {"substeps": 2}}}"#,
     ];
     let manifest = dir.join("m.jsonl");
     std::fs::write(&manifest, lines.join("\n")).unwrap();
@@ -142,7 +143,7 @@ fn a_bad_manifest_reports_every_bad_line_and_runs_nothing() {
     ]);
     let msg = text(&r);
     assert_eq!(r.status.code(), Some(2), "{msg}");
-    assert!(msg.contains("7 of 9 items are bad"), "{msg}");
+    assert!(msg.contains("8 of 10 items are bad"), "{msg}");
     for (line, says) in [
         (2, "not JSON"),
         (3, "unknown key \"overides\""),
@@ -151,6 +152,7 @@ fn a_bad_manifest_reports_every_bad_line_and_runs_nothing() {
         (6, "cannot read the scene"),
         (7, "unknown fabric preset \"velvet\""),
         (9, "cloth.grid"),
+        (11, "\"solver\" appears twice"),
     ] {
         let at = msg
             .lines()
@@ -408,7 +410,7 @@ fn an_item_s_warnings_name_the_item() {
     let manifest = dir.join("manifest.jsonl");
     std::fs::write(
         &manifest,
-        r#"{"id": "creeping", "scene": "scenes/sheet.toml", "overrides": {"fabric": {"damping_ratio": 20.0}}}"#,
+        r#"{"id": "creeping", "scene": "scenes/sheet.toml", "overrides": {"fabric": {"damping_ratio": 20.0}, "frames": null}}"#,
     )
     .unwrap();
     let out = dir.join("out");
@@ -422,6 +424,18 @@ fn an_item_s_warnings_name_the_item() {
     let log = text(&r);
     assert!(r.status.success(), "{log}");
     assert!(log.contains("warning: item creeping: "), "{log}");
+    // Every warning, the run's and the result's as well as the setup's, and the manifest's
+    // (here a null that removes nothing, `frames` being a key of [solver]).
+    let warnings: Vec<&str> = log.lines().filter(|l| l.contains("warning:")).collect();
+    assert!(warnings.len() >= 2, "{log}");
+    assert!(
+        warnings.iter().all(|l| l.contains("item creeping")),
+        "{log}"
+    );
+    assert!(
+        log.contains("frames is null, but the scene has no frames"),
+        "{log}"
+    );
 }
 
 #[test]

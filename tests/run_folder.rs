@@ -89,14 +89,28 @@ fn a_run_folder_previews_and_resumes_from_another_directory() {
     ];
     let mut args = args.to_vec();
     args.extend(["--out", png.to_str().unwrap()]);
+    const EDITED: &str = "scene.toml was edited after the run";
     if common::gpu().is_some() {
         let r = drapekit_in(&elsewhere, &args);
-        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let log = String::from_utf8_lossy(&r.stderr);
+        assert!(r.status.success(), "{log}");
+        assert!(!log.contains(EDITED), "{log}");
         assert!(png.is_file());
     }
     let r = drapekit_in(&elsewhere, &["resume", out_s, "--frames", "6", "--quiet"]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     assert_eq!(summary(&out)["frames"], 6);
+
+    // The copy edited afterwards: the preview says that it draws a scene that did not run.
+    let copy = out.join("scene.toml");
+    let text = std::fs::read_to_string(&copy).unwrap();
+    std::fs::write(&copy, format!("{text}\n# edited\n")).unwrap();
+    if common::gpu().is_some() {
+        let r = drapekit_in(&elsewhere, &args);
+        let log = String::from_utf8_lossy(&r.stderr);
+        assert!(r.status.success(), "{log}");
+        assert!(log.contains(EDITED), "{log}");
+    }
 }
 
 #[test]

@@ -235,7 +235,7 @@ fn attempt(item: &Item, tmp: &Path, opts: &ItemOptions) -> Result<(), Failure> {
         overwrite: false,
     };
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        crate::run::as_item(&item.id, || run_scene(&item.scene, &run_opts))
+        crate::notice::as_item(&item.id, || run_scene(&item.scene, &run_opts))
     }));
     match result {
         Ok(Ok(_)) => Ok(()),

@@ -21,7 +21,7 @@ pub fn last_frame(
     let inside = show_through(prep, positions, frame);
     let found = result_warnings(prep, stats, inside.as_ref(), true);
     for w in &found {
-        eprintln!("drapekit: warning: {w}");
+        crate::notice::warn(w);
     }
     (inside, found)
 }

@@ -71,7 +71,7 @@ impl<'a> RunPreviews<'a> {
 
     fn warn(&mut self, what: &str, e: Error) {
         let w = format!("{what} not rendered: {e}");
-        eprintln!("drapekit: warning: {w}");
+        crate::notice::warn(&w);
         self.warnings.push(w);
         self.failed = true;
     }

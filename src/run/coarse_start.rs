@@ -28,11 +28,11 @@ pub(super) fn coarse_start(
         *coarse_start = None;
     }
     let prep = prepare(&coarse)?;
-    eprintln!(
-        "drapekit: coarse start: sewing and draping {} particles at {distance:.3} m until they \
-         settle (a second Ctrl-C stops it at once)",
+    crate::notice::note(&format!(
+        "coarse start: sewing and draping {} particles at {distance:.3} m until they settle \
+         (a second Ctrl-C stops it at once)",
         prep.model.len()
-    );
+    ));
     let mut solver = build_solver(&prep, device)?;
     let mut stats = RunStats::default();
     simulate(&prep, solver.as_mut(), &mut stats, |_, _| Ok(())).map_err(|e| match e {

@@ -8,6 +8,7 @@ use crate::cpu::CpuSolver;
 use crate::error::Error;
 use crate::export::Exporter;
 use crate::gpu::{AdapterChoice, GpuContext, GpuSolver};
+use crate::notice::{note, warn};
 use crate::output::Summary;
 use crate::preview::RunPreviews;
 use crate::scene::Scene;
@@ -23,28 +24,6 @@ use summary::Backend;
 /// Set by the CLI's Ctrl-C handler: the run stops after the current frame, writes a checkpoint
 /// and returns `Error::Interrupted`.
 pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
-
-thread_local! {
-    /// The batch item this thread runs, if any: its warnings name it, since items run side
-    /// by side and their lines interleave.
-    static ITEM: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
-}
-
-/// Runs `f` with this thread's warnings labelled as batch item `id`'s.
-pub fn as_item<T>(id: &str, f: impl FnOnce() -> T) -> T {
-    ITEM.with(|item| *item.borrow_mut() = Some(id.to_string()));
-    let out = f();
-    ITEM.with(|item| *item.borrow_mut() = None);
-    out
-}
-
-/// A warning on stderr, with the batch item it belongs to.
-fn warn(w: &str) {
-    ITEM.with(|item| match &*item.borrow() {
-        Some(id) => eprintln!("drapekit: warning: item {id}: {w}"),
-        None => eprintln!("drapekit: warning: {w}"),
-    });
-}
 
 /// Output past which a run says, before it starts, how much it will write: 1 GiB.
 const LARGE_OUTPUT_BYTES: u64 = 1 << 30;
@@ -244,10 +223,10 @@ pub fn resume_run(
     let scene = if h.scene_path.exists() {
         Scene::load(&h.scene_path)?
     } else {
-        eprintln!(
-            "drapekit: {} is gone; resuming with the scene as the checkpoint keeps it",
+        note(&format!(
+            "{} is gone; resuming with the scene as the checkpoint keeps it",
             h.scene_path.display()
-        );
+        ));
         Scene::parse(&h.scene_text, &h.scene_path)?
     };
     if scene.source != h.scene_text {
@@ -339,12 +318,12 @@ fn run_scene_from(
     crate::run_folder::clear(&out_dir, &stale)?;
     let temporaries = crate::atomic_file::remove_stale_temporaries(&out_dir);
     if !temporaries.is_empty() {
-        eprintln!(
-            "drapekit: removed {} temporary file(s) a stopped run left in {}: {}",
+        note(&format!(
+            "removed {} temporary file(s) a stopped run left in {}: {}",
             temporaries.len(),
             out_dir.display(),
             temporaries.join(", ")
-        );
+        ));
     }
 
     let mut outputs = Vec::new();
@@ -561,16 +540,16 @@ fn set_up(
     // that fits but writes gigabytes says so before it starts.
     let output = crate::export::disk::check_space(scene, &prep, out_dir, from_frame)?;
     if output.bytes() > LARGE_OUTPUT_BYTES {
-        eprintln!(
-            "drapekit: this run writes about {} ({} frames) into {}",
+        note(&format!(
+            "this run writes about {} ({} frames) into {}",
             crate::export::disk::size(output.bytes()),
             output.frames,
             out_dir.display()
-        );
+        ));
     }
     let solver = build_solver(&prep, device.as_ref())?;
-    if let Some(note) = &backend_note {
-        eprintln!("drapekit: {note}");
+    if let Some(n) = &backend_note {
+        note(n);
     }
     let mut warnings = prep.warnings.clone();
     let wants_edges = (prep.model.colliders.iter()).any(|c| c.edges.is_some());

@@ -40,6 +40,7 @@ pub(super) fn summary(
         scene: crate::run_folder::absolute(&scene.path)
             .display()
             .to_string(),
+        scene_sha256: crate::run_folder::text_sha256(&scene.source),
         inputs: crate::run_folder::inputs(scene),
         backend: backend.name.to_string(),
         backend_note: backend.note,
@@ -194,7 +195,7 @@ pub(super) fn finish_summary(
 fn cause_first(result: Result<(), Error>, later: Result<(), Error>) -> Result<(), Error> {
     match (result, later) {
         (Err(e), Err(w)) => {
-            eprintln!("drapekit: also: {w}");
+            crate::notice::note(&format!("also: {w}"));
             Err(e)
         }
         (Err(e), Ok(())) | (Ok(()), Err(e)) => Err(e),

@@ -1,0 +1,35 @@
+//! What a run says on stderr besides its progress bars: warnings and notes. Batch items run
+//! side by side and their lines interleave, so each line names the item its thread runs.
+
+use std::cell::RefCell;
+
+thread_local! {
+    /// The batch item this thread runs, if any.
+    static ITEM: RefCell<Option<String>> = const { RefCell::new(None) };
+}
+
+/// Runs `f` with this thread's warnings and notes labelled as batch item `id`'s.
+pub fn as_item<T>(id: &str, f: impl FnOnce() -> T) -> T {
+    ITEM.with(|item| *item.borrow_mut() = Some(id.to_string()));
+    let out = f();
+    ITEM.with(|item| *item.borrow_mut() = None);
+    out
+}
+
+/// A warning on stderr: `drapekit: warning: [item ID: ]w`.
+pub fn warn(w: &str) {
+    eprintln!("drapekit: warning: {}{w}", label());
+}
+
+/// A note on stderr: `drapekit: [item ID: ]n`.
+pub fn note(n: &str) {
+    eprintln!("drapekit: {}{n}", label());
+}
+
+/// `item ID: ` on a batch item's thread, else nothing.
+fn label() -> String {
+    ITEM.with(|item| match &*item.borrow() {
+        Some(id) => format!("item {id}: "),
+        None => String::new(),
+    })
+}
