@@ -420,7 +420,9 @@ fn execute(command: Command) -> Result<(), Error> {
         }
         Command::Plan { scene, json } => {
             let scene = Scene::load(&scene)?;
-            drapekit::progress::enable(!json);
+            // The bake's bar is on stderr and drawn only on a terminal: `--json` output to a
+            // pipe stays clean, and a first bake of a fine field is not seconds of silence.
+            drapekit::progress::enable(true);
             for w in drapekit::model::budget::load_warnings(&scene) {
                 eprintln!("drapekit: warning: {w}");
             }
