@@ -54,7 +54,7 @@ pub fn unreachable_bodies(
 pub const REACH_MARGIN_M: f32 = 1.0;
 
 /// The box around `points`.
-fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
+pub fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
     points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
         (lo.min(p), hi.max(p))
     })
@@ -246,10 +246,7 @@ pub fn mesh_warnings(model: &ClothModel, check_duplicates: bool) -> Vec<String> 
         return warnings;
     }
     // A pattern's size is checked against a garment's when it loads; a mesh or grid here.
-    let (lo, hi) = (model.positions.iter())
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(*p), hi.max(*p))
-        });
+    let (lo, hi) = bounds(model.positions.iter().copied());
     let span = (hi - lo).max_element();
     if span.is_finite() && !(0.01..=10.0).contains(&span) {
         warnings.push(format!(

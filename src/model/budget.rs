@@ -383,10 +383,7 @@ pub const MIN_PARTICLES_ACROSS: f64 = 10.0;
 fn largest_panel_m(pattern: &Pattern) -> f64 {
     (pattern.panels.iter())
         .map(|panel| {
-            let (lo, hi) = (panel.edges.iter()).map(|e| e.curve.bounds()).fold(
-                (glam::DVec2::INFINITY, glam::DVec2::NEG_INFINITY),
-                |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
-            );
+            let (lo, hi) = panel.outline_box();
             (hi - lo).max_element() / pattern.units_in_meter
         })
         .fold(0.0, f64::max)
@@ -408,7 +405,7 @@ fn in_garment_range(span: f64) -> bool {
 }
 
 /// Each panel's farthest reach from the origin once placed, in m, and its placed bounding box:
-/// the box of its outline's curves (`Curve::bounds`) carried into 3D.
+/// the box of its outline's curves (`Panel::outline_box`) carried into 3D.
 fn panel_reach(pattern: &Pattern, options: &GarmentOptions) -> Vec<(f64, [DVec3; 2])> {
     let unit = pattern.units_in_meter;
     (pattern.panels.iter())
@@ -421,10 +418,7 @@ fn panel_reach(pattern: &Pattern, options: &GarmentOptions) -> Vec<(f64, [DVec3;
                 }
                 None => (panel.rotation(), panel.translation),
             };
-            let (lo2, hi2) = (panel.edges.iter()).map(|e| e.curve.bounds()).fold(
-                (glam::DVec2::INFINITY, glam::DVec2::NEG_INFINITY),
-                |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
-            );
+            let (lo2, hi2) = panel.outline_box();
             let corners = [
                 (lo2.x, lo2.y),
                 (hi2.x, lo2.y),

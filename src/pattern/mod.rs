@@ -49,6 +49,15 @@ impl Panel {
         DMat3::from_rotation_z(r.z) * DMat3::from_rotation_y(r.y) * DMat3::from_rotation_x(r.x)
     }
 
+    /// The box around the outline's curves (`Curve::bounds`), in pattern units: corners low
+    /// and high.
+    pub fn outline_box(&self) -> (DVec2, DVec2) {
+        (self.edges.iter()).map(|e| e.curve.bounds()).fold(
+            (DVec2::INFINITY, DVec2::NEG_INFINITY),
+            |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
+        )
+    }
+
     /// Twice the signed area of the corner loop (> 0: counter-clockwise).
     pub fn signed_area2(&self) -> f64 {
         let v = &self.vertices;

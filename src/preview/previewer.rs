@@ -16,6 +16,7 @@ use crate::body::exact::ExactBody;
 use crate::body::Body;
 use crate::error::{Error, InputError};
 use crate::gpu::{AdapterChoice, GpuContext};
+use crate::metrics::bounds;
 use crate::model::build_deforming;
 use crate::scene::{BodySettings, Scene};
 use glam::Vec3;
@@ -49,14 +50,6 @@ pub struct Look {
 
 pub(super) fn bad(path: &Path, problem: impl Into<String>, fix: impl Into<String>) -> Error {
     Error::Input(InputError::new(path, "", problem, fix))
-}
-
-/// The bounding box of `points`.
-pub fn bounds(points: &[Vec3]) -> (Vec3, Vec3) {
-    points.iter().fold(
-        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    )
 }
 
 /// The frame's pattern coordinates turned so that u runs along each panel's warp (its grain
@@ -389,7 +382,7 @@ impl<'a> Previewer<'a> {
     /// The box a preset camera frames: the cloth, and the bodies where they lie near the
     /// cloth's box (a T-shirt's head, a skirt's hips, not the whole mannequin).
     pub fn framing_box(&self, frame: u32, cloth: &[Vec3]) -> (Vec3, Vec3) {
-        let (lo, hi) = bounds(cloth);
+        let (lo, hi) = bounds(cloth.iter().copied());
         // Up by 40% of the cloth's height (a T-shirt's head), elsewhere by 10% of its size.
         let side = Vec3::splat(0.1 * (hi - lo).max_element());
         let (near_lo, near_hi) = (lo - side, hi + side + Vec3::Y * 0.4 * (hi.y - lo.y));
@@ -400,7 +393,7 @@ impl<'a> Previewer<'a> {
         if near.is_empty() {
             return (lo, hi);
         }
-        let (b_lo, b_hi) = bounds(&near);
+        let (b_lo, b_hi) = bounds(near.into_iter());
         (lo.min(b_lo), hi.max(b_hi))
     }
 
