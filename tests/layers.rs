@@ -13,6 +13,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("suggest", 1),
     ("toml_message", 1),
     ("progress", 1),
+    ("notice", 1),
     ("glb", 1),
     ("mesh", 2),
     ("pattern", 2),
