@@ -7,6 +7,42 @@ mod common;
 
 use std::process::Command;
 
+/// `drapekit run s.toml --backend cpu --quiet --overwrite --out OUT` on `scene` (its
+/// text), written as s.toml in this test's own temporary folder `tag`: the exit code and
+/// stderr. The folder is removed afterwards.
+fn run_scene_text(tag: &str, scene: &str) -> (Option<i32>, String) {
+    let work = std::env::temp_dir().join(format!("drapekit-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&work).unwrap();
+    std::fs::write(work.join("s.toml"), scene).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
+        .args([
+            "run",
+            work.join("s.toml").to_str().unwrap(),
+            "--backend",
+            "cpu",
+        ])
+        .args([
+            "--quiet",
+            "--overwrite",
+            "--out",
+            work.join("out").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_dir_all(&work);
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// What a run that stopped (exit 3) says after "simulation stopped": the advice.
+fn advice_after_stop(code: Option<i32>, stderr: &str) -> &str {
+    assert_eq!(code, Some(3), "{stderr}");
+    let stopped = stderr.find("simulation stopped").expect("the run stops");
+    &stderr[stopped..]
+}
+
 #[test]
 fn every_bad_scene_is_refused_cleanly() {
     let dir = common::fixture("bad");
@@ -302,37 +338,21 @@ fn seams_far_stiffer_than_the_fabric_are_warned_and_named_when_the_run_explodes(
     // panels shut within the first frame and tear it. The scene is warned at its line, and the
     // explosion names the seams rather than the substeps. (100 times the fabric's runs: 6% at
     // most over 30 frames at 4 cm.)
-    let work = std::env::temp_dir().join(format!("drapekit-seams-{}", std::process::id()));
-    std::fs::create_dir_all(&work).unwrap();
     let scene = format!(
         "[cloth.pattern]\npath = {:?}\nparticle_distance_m = 0.04\nseam_stiffness_n_m = 1e9\n\
          seam_sewing_time_s = 0.6\n[fabric]\npreset = \"cotton\"\n[solver]\nframes = 2\n\
          substeps = 8\nintegrator = \"implicit\"\n[output]\nobj = false\n",
         common::fixture("patterns/tshirt_apose_woven.json")
     );
-    std::fs::write(work.join("s.toml"), scene).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
-        .args([
-            "run",
-            work.join("s.toml").to_str().unwrap(),
-            "--backend",
-            "cpu",
-        ])
-        .args(["--out", work.join("out").to_str().unwrap()])
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let (code, stderr) = run_scene_text("seams", &scene);
     assert!(
         stderr.contains("s.toml:4: cloth.pattern.seam_stiffness_n_m: 246914 times the fabric's"),
         "{stderr}"
     );
-    assert_eq!(out.status.code(), Some(3), "{stderr}");
-    let stopped = stderr.find("simulation stopped").expect("the run stops");
     assert!(
-        stderr[stopped..].contains("the seams pulled the panels together at once"),
+        advice_after_stop(code, &stderr).contains("the seams pulled the panels together at once"),
         "{stderr}"
     );
-    let _ = std::fs::remove_dir_all(&work);
 }
 
 #[test]
@@ -340,40 +360,24 @@ fn a_wind_past_any_storm_is_warned_and_blamed_when_the_cloth_flies_apart() {
     // 500 m/s with 30% gusts on a flag pinned at one edge: the drag sets the substep (auto),
     // and the cloth is flung past 100 m/s within a few frames. The advice names the wind, not
     // the substep the drag already chose.
-    let work = std::env::temp_dir().join(format!("drapekit-gale-{}", std::process::id()));
-    std::fs::create_dir_all(&work).unwrap();
-    std::fs::write(
-        work.join("s.toml"),
+    let (code, stderr) = run_scene_text(
+        "gale",
         "[cloth.grid]\nwidth_m = 1.5\nheight_m = 1.0\ncolumns = 36\nrows = 24\n\
          center_m = [0.75, 2.0, 0.0]\nplane = \"xy\"\n[fabric]\ndensity_kg_m2 = 0.12\n\
          stretch_stiffness_n_m = 400.0\nbending_stiffness_n_m = 1e-5\ndamping_ratio = 0.1\n\
          [[pins]]\nedge = \"left\"\n[wind]\nvelocity_m_s = [500.0, 0.0, 0.0]\n\
          gust_amplitude = 0.3\n[solver]\nframes = 6\nsubsteps = \"auto\"\n\
          integrator = \"symplectic\"\n[output]\nobj = false\n",
-    )
-    .unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
-        .args([
-            "run",
-            work.join("s.toml").to_str().unwrap(),
-            "--backend",
-            "cpu",
-        ])
-        .args(["--out", work.join("out").to_str().unwrap()])
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    );
     assert!(
         stderr.contains("s.toml:16: wind.velocity_m_s: its gusts reach 650 m/s"),
         "{stderr}"
     );
-    assert_eq!(out.status.code(), Some(3), "{stderr}");
-    let stopped = stderr.find("simulation stopped").expect("the run stops");
     assert!(
-        stderr[stopped..].contains("chosen for the wind's drag, the wind tore the cloth"),
+        advice_after_stop(code, &stderr)
+            .contains("chosen for the wind's drag, the wind tore the cloth"),
         "{stderr}"
     );
-    let _ = std::fs::remove_dir_all(&work);
 }
 
 #[test]
@@ -381,37 +385,18 @@ fn a_body_the_cloth_cannot_reach_in_the_run_is_warned() {
     // A 1 m cloth at 0.65 m over a 0.3 m sphere: reached. The same sphere 100 m to the side:
     // in 2 frames the cloth falls 3 cm and reaches 1 m around itself, so it touches nothing.
     // Below by 5 m, 48 frames (2 s): a free fall covers 19.6 m, so the sphere is reached.
-    let work = std::env::temp_dir().join(format!("drapekit-far-{}", std::process::id()));
-    std::fs::create_dir_all(&work).unwrap();
     let warned_with = |center: &str, frames: u32, extra: &str| {
-        std::fs::write(
-            work.join("s.toml"),
-            format!(
+        let (code, stderr) = run_scene_text(
+            "far",
+            &format!(
                 "[cloth.grid]\nwidth_m = 1.0\nheight_m = 1.0\ncolumns = 6\nrows = 6\n\
                  center_m = [0.0, 0.65, 0.0]\n[fabric]\npreset = \"cotton\"\n[body]\n\
                  shape = \"sphere\"\nradius_m = 0.3\ncenter_m = {center}\n\
                  sdf_resolution_m = 0.05\n[solver]\nframes = {frames}\nsubsteps = 4\n\
                  integrator = \"implicit\"\n[output]\nobj = false\n{extra}"
             ),
-        )
-        .unwrap();
-        let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
-            .args([
-                "run",
-                work.join("s.toml").to_str().unwrap(),
-                "--backend",
-                "cpu",
-            ])
-            .args([
-                "--quiet",
-                "--overwrite",
-                "--out",
-                work.join("out").to_str().unwrap(),
-            ])
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-        assert_eq!(out.status.code(), Some(0), "{stderr}");
+        );
+        assert_eq!(code, Some(0), "{stderr}");
         stderr.contains("touches nothing").then_some(stderr)
     };
     let warned = |center: &str, frames: u32| warned_with(center, frames, "");
@@ -426,7 +411,6 @@ fn a_body_the_cloth_cannot_reach_in_the_run_is_warned() {
     // sphere 3.35 m above is within reach though ½gt² + wt ends 0.38 m up.
     let updraft = "[wind]\nvelocity_m_s = [0.0, 10.0, 0.0]\n";
     assert_eq!(warned_with("[0.0, 4.0, 0.0]", 48, updraft), None);
-    let _ = std::fs::remove_dir_all(&work);
 }
 
 #[test]
@@ -461,69 +445,33 @@ fn a_self_collision_layer_of_metres_is_blamed_when_the_cloth_flies_apart() {
     // A 10 m self-collision thickness on a 0.5 m cloth of 7 cm edges: every particle repels
     // every other, the first frame tears it, and the advice names the thickness (it is
     // warned before the run too), not the substep.
-    let work = std::env::temp_dir().join(format!("drapekit-selfthick-{}", std::process::id()));
-    std::fs::create_dir_all(&work).unwrap();
-    std::fs::write(
-        work.join("s.toml"),
+    let (code, stderr) = run_scene_text(
+        "selfthick",
         "[cloth.grid]\nwidth_m = 0.5\nheight_m = 0.5\ncolumns = 8\nrows = 8\n\
          [fabric]\npreset = \"cotton\"\n[self_collision]\nthickness_m = 10\n\
          [solver]\nframes = 2\n[output]\nobj = false\n",
-    )
-    .unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
-        .args([
-            "run",
-            work.join("s.toml").to_str().unwrap(),
-            "--backend",
-            "cpu",
-        ])
-        .args(["--out", work.join("out").to_str().unwrap()])
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(3), "{stderr}");
-    let stopped = stderr.find("simulation stopped").expect("the run stops");
+    );
     assert!(
-        stderr[stopped..].contains("self-collision pushed the cloth apart"),
+        advice_after_stop(code, &stderr).contains("self-collision pushed the cloth apart"),
         "{stderr}"
     );
-    let _ = std::fs::remove_dir_all(&work);
 }
 
 #[test]
 fn a_shape_thinner_than_its_distance_field_s_spacing_is_warned() {
     // A sphere of radius 1 µm under the default 1 cm field: nothing for the cloth to meet. At
     // 2 cm across (radius 1 cm) it is resolved.
-    let work = std::env::temp_dir().join(format!("drapekit-thin-{}", std::process::id()));
-    std::fs::create_dir_all(&work).unwrap();
     let warned = |radius: &str| {
-        std::fs::write(
-            work.join("s.toml"),
-            format!(
+        let (code, stderr) = run_scene_text(
+            "thin",
+            &format!(
                 "[cloth.grid]\nwidth_m = 0.5\nheight_m = 0.5\ncolumns = 6\nrows = 6\n\
                  center_m = [0.0, 0.1, 0.0]\n[fabric]\npreset = \"cotton\"\n[body]\n\
                  shape = \"sphere\"\nradius_m = {radius}\n[solver]\nframes = 1\n\
                  [output]\nobj = false\n"
             ),
-        )
-        .unwrap();
-        let out = Command::new(env!("CARGO_BIN_EXE_drapekit"))
-            .args([
-                "run",
-                work.join("s.toml").to_str().unwrap(),
-                "--backend",
-                "cpu",
-            ])
-            .args([
-                "--quiet",
-                "--overwrite",
-                "--out",
-                work.join("out").to_str().unwrap(),
-            ])
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-        assert_eq!(out.status.code(), Some(0), "{stderr}");
+        );
+        assert_eq!(code, Some(0), "{stderr}");
         stderr.contains("thick at its thinnest").then_some(stderr)
     };
     let tiny = warned("1e-6").expect("warned");
@@ -532,7 +480,6 @@ fn a_shape_thinner_than_its_distance_field_s_spacing_is_warned() {
         "{tiny}"
     );
     assert_eq!(warned("0.01"), None);
-    let _ = std::fs::remove_dir_all(&work);
 }
 
 #[test]
