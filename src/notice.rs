@@ -8,12 +8,18 @@ thread_local! {
     static ITEM: RefCell<Option<String>> = const { RefCell::new(None) };
 }
 
-/// Runs `f` with this thread's warnings and notes labelled as batch item `id`'s.
+/// Runs `f` with this thread's warnings and notes labelled as batch item `id`'s. The label
+/// goes when `f` returns or unwinds, so that the thread's next item is not named after it.
 pub fn as_item<T>(id: &str, f: impl FnOnce() -> T) -> T {
+    struct Unlabel;
+    impl Drop for Unlabel {
+        fn drop(&mut self) {
+            ITEM.with(|item| *item.borrow_mut() = None);
+        }
+    }
     ITEM.with(|item| *item.borrow_mut() = Some(id.to_string()));
-    let out = f();
-    ITEM.with(|item| *item.borrow_mut() = None);
-    out
+    let _unlabel = Unlabel;
+    f()
 }
 
 /// A warning on stderr: `drapekit: warning: [item ID: ]w`.

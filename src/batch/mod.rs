@@ -109,19 +109,20 @@ pub fn run(
         .map_err(|e| InputError::new(cli, "--shard", e, "see `drapekit batch --help`"))?;
     let jobs_wanted = jobs(opts.jobs, opts.item.backend)?;
     let manifest = Manifest::load(&opts.manifest)?;
-    for item in &manifest.items {
-        for w in &item.warnings {
-            eprintln!(
-                "drapekit: warning: {} line {}, item {}: {w}",
-                manifest.path.display(),
-                item.line,
-                item.id
-            );
-        }
-    }
     let mine: Vec<&Item> = (manifest.items.iter())
         .filter(|it| shard.owns(it.index))
         .collect();
+    // This shard's items only: each of N shard jobs would repeat the others'.
+    for item in &mine {
+        for w in &item.warnings {
+            crate::notice::warn(&format!(
+                "{} line {}, item {}: {w}",
+                manifest.path.display(),
+                item.line,
+                item.id
+            ));
+        }
+    }
     std::fs::create_dir_all(&opts.out).map_err(|e| Error::io(&opts.out, e))?;
     let jobs = jobs_wanted.min(mine.len()).max(1);
     log(&format!(

@@ -8,8 +8,9 @@ use serde_json::Value;
 /// density that would otherwise override a new `fabric.preset`), anything else replaces.
 /// `at` is the dotted key path of `table`, for messages. Returns a warning for each null that
 /// removed nothing (the merge patch allows it, but it is how a key put in the wrong table
-/// looks: `"frames": null` for `solver.frames`) or a whole table (every key in it falls back
-/// to its default, which a null meant for one key of it does by surprise).
+/// looks: `"frames": null` for `solver.frames`) or removed whole tables (a null meant for one
+/// key of them does that by surprise). A table the patch only removes keys from is not
+/// created: an empty `[self_collision]` would switch the effect on.
 pub fn merge(
     table: &mut toml::Table,
     patch: &serde_json::Map<String, Value>,
@@ -19,27 +20,22 @@ pub fn merge(
     for (key, value) in patch {
         let path = dotted(at, key);
         match value {
-            Value::Null => match table.remove(key) {
-                None => warnings.push(format!(
-                    "overrides: {path} is null, but the scene has no {path}, so it removes \
-                     nothing; check which table the key belongs to"
-                )),
-                Some(toml::Value::Table(t)) => warnings.push(format!(
-                    "overrides: {path} is null, which removes the scene's whole [{path}] \
-                     table ({} keys): each takes its default; to remove one key, write \
-                     {{\"{key}\": {{\"KEY\": null}}}}",
-                    t.len()
-                )),
-                Some(_) => {}
-            },
+            Value::Null => {
+                let removed = table.remove(key);
+                warnings.extend(removal_warning(&path, key, removed.as_ref()));
+            }
             Value::Object(inner) => {
-                if !table.get(key).is_some_and(|v| v.is_table()) {
+                let existed = table.get(key).is_some_and(|v| v.is_table());
+                if !existed {
                     table.insert(key.clone(), toml::Value::Table(toml::Table::new()));
                 }
                 let Some(toml::Value::Table(sub)) = table.get_mut(key) else {
                     unreachable!("inserted above")
                 };
                 warnings.extend(merge(sub, inner, &path)?);
+                if !existed && sub.is_empty() {
+                    table.remove(key);
+                }
             }
             other => {
                 table.insert(key.clone(), to_toml(other, &path)?);
@@ -47,6 +43,32 @@ pub fn merge(
         }
     }
     Ok(warnings)
+}
+
+/// The warning for a null at `path` that removed `removed`, if it deserves one: nothing, a
+/// table, or an array of tables.
+fn removal_warning(path: &str, key: &str, removed: Option<&toml::Value>) -> Option<String> {
+    match removed {
+        None => Some(format!(
+            "overrides: {path} is null, but the scene has no {path}, so it removes nothing; \
+             check which table the key belongs to"
+        )),
+        Some(toml::Value::Table(t)) => Some(format!(
+            "overrides: {path} is null, which removes the scene's whole [{path}] table ({} \
+             keys): a table with defaults falls back to them, an optional one (a body, the \
+             wind, self-collision, the preview) is switched off; to remove one key, write \
+             {{\"{key}\": {{\"KEY\": null}}}}",
+            t.len()
+        )),
+        Some(toml::Value::Array(a)) if !a.is_empty() && a.iter().all(|v| v.is_table()) => {
+            Some(format!(
+                "overrides: {path} is null, which removes all {} of the scene's [[{path}]] \
+                 tables",
+                a.len()
+            ))
+        }
+        Some(_) => None,
+    }
 }
 
 /// A JSON value as TOML. TOML has no null, so a null inside an array or a new table is an
@@ -153,6 +175,27 @@ mod tests {
             "{warnings:?}"
         );
         assert!(table.is_empty());
+    }
+
+    #[test]
+    fn a_null_inside_a_missing_table_creates_no_table_and_arrays_of_tables_are_warned() {
+        // An empty [self_collision] would switch self-collision on.
+        let mut table: toml::Table =
+            toml::from_str("[[pins]]\ncorners = [\"top-left\"]\n[[pins]]\nindices = [3]\n")
+                .unwrap();
+        let patch = serde_json::json!({"self_collision": {"thickness_m": null}});
+        let warnings = merge(&mut table, patch.as_object().unwrap(), "").unwrap();
+        assert!(!table.contains_key("self_collision"), "{table:?}");
+        assert!(
+            warnings[0].contains("self_collision.thickness_m is null, but the scene has no"),
+            "{warnings:?}"
+        );
+        let patch = serde_json::json!({"pins": null});
+        let warnings = merge(&mut table, patch.as_object().unwrap(), "").unwrap();
+        assert!(
+            warnings[0].contains("removes all 2 of the scene's [[pins]]"),
+            "{warnings:?}"
+        );
     }
 
     #[test]
