@@ -90,7 +90,7 @@ pub fn input_files(scene: &crate::scene::Scene) -> Vec<(String, String)> {
         .map(|path| {
             let sha = std::fs::read(&path).map_or_else(
                 |_| "missing".to_string(),
-                |bytes| format!("{:x}", Sha256::digest(&bytes)),
+                |bytes| crate::run_folder::sha256_hex(&bytes),
             );
             (path, sha)
         })

@@ -338,7 +338,7 @@ fn execute(command: Command) -> Result<(), Error> {
                 found.extend(drapekit::model::budget::load_warnings(&scene));
                 if !found.is_empty() {
                     for w in &found {
-                        eprintln!("drapekit: warning: {w}");
+                        drapekit::notice::warn(w);
                     }
                     return Err(Error::Warnings(format!(
                         "--strict: {} warning(s) about the scene's inputs (above); nothing was run",
@@ -424,7 +424,7 @@ fn execute(command: Command) -> Result<(), Error> {
             // pipe stays clean, and a first bake of a fine field is not seconds of silence.
             drapekit::progress::enable(true);
             for w in drapekit::model::budget::load_warnings(&scene) {
-                eprintln!("drapekit: warning: {w}");
+                drapekit::notice::warn(&w);
             }
             let prep = drapekit::sim::prepare(&scene)?;
             // What `drapekit run` would write into the scene's output folder, and whether it fits.

@@ -192,9 +192,9 @@ pub fn run_scene(run: &Path, summary: &serde_json::Value) -> Result<Option<Scene
     }
 }
 
-/// SHA-256 of a text, in hex.
-pub fn text_sha256(text: &str) -> String {
-    format!("{:x}", Sha256::digest(text.as_bytes()))
+/// SHA-256 of `bytes`, in hex: how a run folder and a checkpoint record what they read.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    format!("{:x}", Sha256::digest(bytes))
 }
 
 /// Warns when the run folder's scene copy is not the text the run read (the summary's
@@ -202,7 +202,7 @@ pub fn text_sha256(text: &str) -> String {
 /// scene's bodies, seams and fabric around frames simulated with the old ones.
 fn warn_if_edited(copy: &Path, text: &str, summary: &serde_json::Value) {
     if let Some(ran) = summary["scene_sha256"].as_str() {
-        if ran != text_sha256(text) {
+        if ran != sha256_hex(text.as_bytes()) {
             crate::notice::warn(&format!(
                 "{} was edited after the run: the preview draws the edited scene's bodies, \
                  seams and fabric around frames simulated with the scene as it was; rerun \

@@ -40,7 +40,7 @@ pub(super) fn summary(
         scene: crate::run_folder::absolute(&scene.path)
             .display()
             .to_string(),
-        scene_sha256: crate::run_folder::text_sha256(&scene.source),
+        scene_sha256: crate::run_folder::sha256_hex(scene.source.as_bytes()),
         inputs: crate::run_folder::inputs(scene),
         backend: backend.name.to_string(),
         backend_note: backend.note,
