@@ -753,3 +753,39 @@ fn the_buckling_hires_shirt_is_the_hires_shirt_with_springs_that_buckle() {
     buckling.output.dir = linear.output.dir.clone();
     assert_eq!(buckling, linear);
 }
+
+#[test]
+fn a_fas_coarsening_the_grid_cannot_take_is_warned_and_the_other_curves_written() {
+    // The 17² hanging sheet has 16 intervals a side: a factor of 3 leaves no coarser grid, so
+    // the benchmark says why it has no FAS curve instead of leaving it out in silence.
+    let out = out_dir("convergence_fas_3");
+    let scene = common::fixture("scenes/hanging_sheet_cotton.toml");
+    let r = drapekit(&[
+        "bench",
+        "convergence",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--frames",
+        "0",
+        "--refinements",
+        "1",
+        "--max-sweeps",
+        "2",
+        "--max-newton",
+        "1",
+        "--fas-coarsening",
+        "3",
+    ]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("no FAS curve") && stderr.contains("--fas-coarsening 3"),
+        "{stderr}"
+    );
+    let csv = std::fs::read_to_string(out.join("convergence.csv")).unwrap();
+    assert!(
+        csv.contains(",newton-multigrid,") && !csv.contains(",fas,"),
+        "{csv}"
+    );
+}

@@ -11,6 +11,7 @@
 //! Block Descent sweep of the same mesh, measured in the same run.
 
 use super::cpu_threads_description;
+use super::fas::{CoarseLevel, Fas, FAS_COARSENING, FAS_COARSEST_PARTICLES, FAS_COARSE_SWEEPS};
 use crate::atomic_file::write_atomic;
 use crate::cpu::CpuSolver;
 use crate::error::{Error, InputError};
@@ -46,6 +47,11 @@ pub struct ConvergenceOptions {
     /// Conjugate-gradient iterations in each measured multigrid Newton step (the frames
     /// before it run the scene's solve, `LINEAR_ITERATIONS`).
     pub linear_iterations: u32,
+    /// The FAS V-cycle's coarsening: each level's spacing this many times the one above
+    /// (below 2: no FAS curve).
+    pub fas_coarsening: u32,
+    /// Sweeps on the FAS V-cycle's coarsest level in each cycle.
+    pub fas_sweeps: u32,
 }
 
 /// One point of a method's curve.
@@ -55,9 +61,9 @@ pub struct ConvergenceRow {
     pub refinement: u32,
     /// Particles.
     pub particles: usize,
-    /// "vbd", "newton-multigrid" or "newton-block-jacobi".
+    /// "vbd", "newton-multigrid", "newton-block-jacobi" or "fas".
     pub method: &'static str,
-    /// Sweeps (vbd) or Newton steps run so far.
+    /// Sweeps (vbd), Newton steps or FAS cycles run so far.
     pub iterations: u32,
     /// Wall time so far over one sweep's.
     pub sweep_equivalents: f64,
@@ -70,6 +76,9 @@ pub struct ConvergenceRow {
     /// Newton steps: how far the step's linear solve got, |f − H·c|/|f| for the Newton system
     /// H·c = f and the correction c its conjugate gradients found; `None` for sweeps.
     pub linear_residual: Option<f32>,
+    /// Newton steps and FAS cycles: the step length α the line search took along the
+    /// correction (0: refused); `None` for sweeps.
+    pub step_length: Option<f32>,
 }
 
 /// Runs the benchmark and writes `convergence.csv`, `convergence.md` and `convergence.svg`.
@@ -84,7 +93,12 @@ pub fn run_cli(opts: &ConvergenceOptions) -> Result<Vec<ConvergenceRow>, Error> 
         let mapped = map_state(&scene, &base, &state, &fine, &prep)?;
         let relax = if r == 1 { 0 } else { opts.relax_frames };
         let (relaxed, at) = continue_run(&prep, mapped, &stats, frame, relax)?;
-        rows.extend(measure(&prep, &relaxed, &stats, at, r, opts)?);
+        let level = Level {
+            scene: &fine,
+            prep: &prep,
+            refinement: r,
+        };
+        rows.extend(measure(&level, &relaxed, &stats, at, opts)?);
     }
     std::fs::create_dir_all(&opts.out).map_err(|e| Error::io(&opts.out, e))?;
     write_atomic(&opts.out.join("convergence.csv"), csv(&rows).as_bytes())?;
@@ -229,15 +243,23 @@ fn map_state(
     })
 }
 
-/// Both methods' curves on the substep after `frame`.
+/// The meshing a curve is measured on.
+struct Level<'a> {
+    scene: &'a Scene,
+    prep: &'a Prepared,
+    /// Its spacing divisor.
+    refinement: u32,
+}
+
+/// Every method's curve on the substep after `frame`.
 fn measure(
-    prep: &Prepared,
+    level: &Level,
     state: &ParticleState,
     stats: &RunStats,
     frame: u32,
-    refinement: u32,
     opts: &ConvergenceOptions,
 ) -> Result<Vec<ConvergenceRow>, Error> {
+    let (prep, refinement) = (level.prep, level.refinement);
     let params = phase_params(prep, frame, stats);
     let step = substep_params(prep, frame + 1)[0];
     let mut solver = CpuSolver::new(&prep.model, params, &prep.plan);
@@ -251,8 +273,8 @@ fn measure(
         }
         Ok(())
     };
-    let row =
-        |method, iterations, seconds: f64, sweep: f64, r: (f32, f32), linear| ConvergenceRow {
+    let row = |method, iterations, seconds: f64, sweep: f64, r: (f32, f32), linear, alpha| {
+        ConvergenceRow {
             refinement,
             particles: prep.model.len(),
             method,
@@ -262,7 +284,9 @@ fn measure(
             residual_max: r.0,
             residual_rms: r.1,
             linear_residual: linear,
-        };
+            step_length: alpha,
+        }
+    };
     let mut rows = Vec::new();
     // Plain sweeps: the residual after 1, 2, 4, … sweeps of one solve.
     fresh(&mut solver)?;
@@ -284,7 +308,7 @@ fn measure(
     rows.extend(
         curve
             .into_iter()
-            .map(|(k, s, r)| row("vbd", k, s, sweep, r, None)),
+            .map(|(k, s, r)| row("vbd", k, s, sweep, r, None, None)),
     );
     // Newton steps, each after its sweeps: preconditioned by the V-cycle, and by the block
     // diagonal alone (the single-level alternative).
@@ -317,10 +341,145 @@ fn measure(
             let linear = linear_residual(&solver);
             seconds += run_ops(&mut solver, rest, &step);
             let r = residual(&mut solver, &step);
-            rows.push(row(method, k, seconds, sweep, r, linear));
+            rows.push(row(
+                method,
+                k,
+                seconds,
+                sweep,
+                r,
+                linear,
+                last_step_length(&solver),
+            ));
+        }
+    }
+    if let Some(mut fas) = fas_levels(level, stats, frame, shape.smoothing, opts)? {
+        fresh(&mut solver)?;
+        let points = fas_curve(
+            &mut fas,
+            &mut solver,
+            (state, &step),
+            shape,
+            opts.max_newton,
+        );
+        for (k, seconds, r, alpha) in points {
+            rows.push(row("fas", k, seconds, sweep, r, None, Some(alpha)));
         }
     }
     Ok(rows)
+}
+
+/// `cycles` FAS cycles on `solver`'s substep `step` from `state` (the solve fresh from
+/// `vbd_init`): after each, the cycles so far, their wall time, the force residual and the
+/// step length taken. A cycle is `shape.smoothing` sweeps, the coarse correction and as many
+/// sweeps again (the prolongated correction is smooth only to the coarse triangles' size; the
+/// sweeps take out what it leaves at the fine scale).
+fn fas_curve(
+    fas: &mut Fas,
+    solver: &mut CpuSolver,
+    (state, step): (&ParticleState, &crate::model::layout::SubstepParams),
+    shape: SolveShape,
+    cycles: u32,
+) -> Vec<(u32, f64, (f32, f32), f32)> {
+    let timer = Instant::now();
+    fas.start(state, step, shape.bodies);
+    let mut seconds = timer.elapsed().as_secs_f64();
+    let sweeps = vec![SolveOp::Sweep { iteration: 0 }; shape.smoothing as usize];
+    let mut points = Vec::new();
+    for k in 1..=cycles {
+        seconds += run_ops(solver, &sweeps, step);
+        let timer = Instant::now();
+        let alpha = fas.cycle(solver, step);
+        seconds += timer.elapsed().as_secs_f64();
+        seconds += run_ops(solver, &sweeps, step);
+        points.push((k, seconds, residual(solver, step), alpha));
+    }
+    points
+}
+
+/// The FAS V-cycle below `level`: the scene meshed `opts.fas_coarsening` times coarser, again
+/// and again until a level has at most `FAS_COARSEST_PARTICLES` (or a grid coarsens no
+/// further), each in its phase at `frame`. `None` with `--fas-coarsening 0`.
+fn fas_levels(
+    level: &Level,
+    stats: &RunStats,
+    frame: u32,
+    smoothing: u32,
+    opts: &ConvergenceOptions,
+) -> Result<Option<Fas>, Error> {
+    if opts.fas_coarsening < 2 {
+        return Ok(None);
+    }
+    let fine_chart = chart_of(level.scene, level.prep)?;
+    let dt = phase_params(level.prep, frame, stats).dt;
+    let (mut levels, mut scene, mut particles) =
+        (Vec::new(), level.scene.clone(), level.prep.model.len());
+    while particles > FAS_COARSEST_PARTICLES {
+        let Some(coarse_scene) = coarsened(&scene, opts.fas_coarsening) else {
+            break;
+        };
+        let coarse = prepare(&coarse_scene)?;
+        let params = phase_params(&coarse, frame, stats);
+        assert_eq!(params.dt, dt, "every level takes the same step");
+        particles = coarse.model.len();
+        levels.push(CoarseLevel {
+            solver: CpuSolver::new(&coarse.model, params, &coarse.plan),
+            packed: coarse.model.packed_positions(),
+            chart: chart_of(&coarse_scene, &coarse)?,
+        });
+        scene = coarse_scene;
+    }
+    if levels.is_empty() {
+        let why = if particles > FAS_COARSEST_PARTICLES {
+            format!(
+                "the grid's rows and columns less one do not divide by --fas-coarsening {}; \
+                 give one that divides them",
+                opts.fas_coarsening
+            )
+        } else {
+            format!("it has at most {FAS_COARSEST_PARTICLES} particles, the coarsest level's size")
+        };
+        crate::notice::warn(&format!(
+            "no FAS curve for the cloth of {particles} particles: {why}"
+        ));
+    }
+    Ok(Fas::new(
+        &fine_chart,
+        levels,
+        (smoothing, opts.fas_sweeps),
+        dt,
+    ))
+}
+
+/// The cloth's chart coordinates, or the error that it has none.
+fn chart_of(scene: &Scene, prep: &Prepared) -> Result<Charted, Error> {
+    charted(scene, prep).ok_or_else(|| {
+        bad(
+            scene,
+            "multigrid",
+            "the cloth has no chart coordinates to carry its state between meshings",
+            "use a grid or pattern cloth",
+        )
+    })
+}
+
+/// The scene with its particle spacing multiplied by `factor` (`None` for a grid whose rows
+/// or columns do not coarsen by it).
+fn coarsened(scene: &Scene, factor: u32) -> Option<Scene> {
+    let mut s = scene.clone();
+    match &mut s.cloth {
+        ClothSource::Pattern { options, .. } => options.particle_distance *= factor as f64,
+        ClothSource::Grid { columns, rows, .. } => {
+            if (*columns - 1) % factor != 0 || (*rows - 1) % factor != 0 {
+                return None;
+            }
+            *columns = (*columns - 1) / factor + 1;
+            *rows = (*rows - 1) / factor + 1;
+        }
+        ClothSource::Mesh { .. } => return None,
+    }
+    // Its Newton arrays hold its correction and line search when a coarser level corrects it.
+    s.solver.multigrid = true;
+    Some(s)
 }
 
 /// Conjugate-gradient iterations per Newton step with the block-Jacobi preconditioner: a
@@ -352,6 +511,12 @@ fn linear_residual(solver: &CpuSolver) -> Option<f32> {
     (ff > 0.0).then(|| (crate::cpu::dot(&r, &r) / ff).sqrt())
 }
 
+/// The step length of the last Newton step's line search.
+fn last_step_length(solver: &CpuSolver) -> Option<f32> {
+    let newton = solver.vbd.as_ref()?.newton.as_ref()?;
+    newton.alphas.last().copied()
+}
+
 /// The force residual at the iterate (not timed).
 fn residual(solver: &mut CpuSolver, step: &crate::model::layout::SubstepParams) -> (f32, f32) {
     solver.run_solve_ops(&[SolveOp::ForceResidual], step);
@@ -360,11 +525,11 @@ fn residual(solver: &mut CpuSolver, step: &crate::model::layout::SubstepParams) 
 
 fn csv(rows: &[ConvergenceRow]) -> String {
     let mut out = String::from(
-        "refinement,particles,method,iterations,sweep_equivalents,seconds,residual_max,residual_rms,linear_residual\n",
+        "refinement,particles,method,iterations,sweep_equivalents,seconds,residual_max,residual_rms,linear_residual,step_length\n",
     );
     for r in rows {
         out += &format!(
-            "{},{},{},{},{:.3},{:.6},{:.4e},{:.4e},{}\n",
+            "{},{},{},{},{:.3},{:.6},{:.4e},{:.4e},{},{}\n",
             r.refinement,
             r.particles,
             r.method,
@@ -374,7 +539,8 @@ fn csv(rows: &[ConvergenceRow]) -> String {
             r.residual_max,
             r.residual_rms,
             r.linear_residual
-                .map_or(String::new(), |l| format!("{l:.4e}"))
+                .map_or(String::new(), |l| format!("{l:.4e}")),
+            r.step_length.map_or(String::new(), |a| a.to_string()),
         );
     }
     out
@@ -389,6 +555,20 @@ fn cost_to(rows: &[ConvergenceRow], refinement: u32, method: &str, target: f32) 
         .fold(None, |best: Option<f64>, c| {
             Some(best.map_or(c, |b| b.min(c)))
         })
+}
+
+/// How many of `method`'s steps at `refinement` the line search refused (α = 0), as "k of n"
+/// ("-" without steps).
+fn refused(rows: &[ConvergenceRow], refinement: u32, method: &str) -> String {
+    let steps: Vec<f32> = (rows.iter())
+        .filter(|r| r.refinement == refinement && r.method == method)
+        .filter_map(|r| r.step_length)
+        .collect();
+    if steps.is_empty() {
+        return "-".into();
+    }
+    let zero = steps.iter().filter(|&&a| a == 0.0).count();
+    format!("{zero} of {}", steps.len())
 }
 
 /// The Newton steps' mean RMS reduction per step over the first `steps` (geometric mean).
@@ -417,6 +597,12 @@ fn command_options(opts: &ConvergenceOptions) -> String {
     if opts.linear_iterations != LINEAR_ITERATIONS {
         s += &format!(" --linear-iterations {}", opts.linear_iterations);
     }
+    if opts.fas_coarsening != FAS_COARSENING {
+        s += &format!(" --fas-coarsening {}", opts.fas_coarsening);
+    }
+    if opts.fas_sweeps != FAS_COARSE_SWEEPS {
+        s += &format!(" --fas-sweeps {}", opts.fas_sweeps);
+    }
     if let Some(f) = opts.frames {
         s += &format!(" --frames {f}");
     }
@@ -429,8 +615,8 @@ fn report(opts: &ConvergenceOptions, rows: &[ConvergenceRow], frame: u32) -> Str
          `drapekit bench convergence {} --out {}{}`: the substep after frame {frame}, from the \
          same state, on the CPU ({}). Cost in fine-sweep equivalents (wall time over one Vertex \
          Block Descent sweep of the same mesh); residual |f|/(m·g) over the free particles.\n\n\
-         | spacing ÷ | particles | VBD to RMS 0.1 | Newton to RMS 0.1 | VBD to RMS 0.01 | Newton to RMS 0.01 | Newton, block Jacobi, to RMS 0.01 | Newton's RMS reduction per step (first 4) |\n\
-         |---|---|---|---|---|---|---|---|\n",
+         | spacing ÷ | particles | VBD to RMS 0.1 | Newton to RMS 0.1 | VBD to RMS 0.01 | Newton to RMS 0.01 | Newton, block Jacobi, to RMS 0.01 | FAS to RMS 0.01 | FAS cycles refused | Newton's RMS reduction per step (first 4) |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n",
         opts.scene.display(),
         opts.out.display(),
         command_options(opts),
@@ -443,12 +629,14 @@ fn report(opts: &ConvergenceOptions, rows: &[ConvergenceRow], frame: u32) -> Str
             .find(|x| x.refinement == r)
             .map_or(0, |x| x.particles);
         md += &format!(
-            "| {r} | {particles} | {} | {} | {} | {} | {} | {} |\n",
+            "| {r} | {particles} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             cell(cost_to(rows, r, "vbd", 0.1)),
             cell(cost_to(rows, r, "newton-multigrid", 0.1)),
             cell(cost_to(rows, r, "vbd", 0.01)),
             cell(cost_to(rows, r, "newton-multigrid", 0.01)),
             cell(cost_to(rows, r, "newton-block-jacobi", 0.01)),
+            cell(cost_to(rows, r, "fas", 0.01)),
+            refused(rows, r, "fas"),
             reduction_per_step(rows, r, 4).map_or("-".into(), |v| format!("{v:.2}")),
         );
     }
@@ -456,12 +644,19 @@ fn report(opts: &ConvergenceOptions, rows: &[ConvergenceRow], frame: u32) -> Str
         "\nVBD ran at most {} sweeps; Newton at most {} steps, each with {} \
          conjugate-gradient iterations preconditioned by a multigrid V-cycle, or with \
          {BLOCK_JACOBI_ITERATIONS} \
-         preconditioned by the block diagonal. The full curves are in convergence.csv and \
-         convergence.svg (`linear_residual`: how far each Newton step's linear solve got, \
-         |f − H·c|/|f|).{}\n",
+         preconditioned by the block diagonal. FAS: at most {} V-cycles of nonlinear \
+         multigrid around the sweeps, each level the cloth meshed {}× coarser down to at most \
+         {FAS_COARSEST_PARTICLES} particles, {} sweeps on the coarsest, the correction taken \
+         through the same line search (a refused cycle is its sweeps alone). The full curves \
+         are in convergence.csv and convergence.svg (`linear_residual`: how far each Newton \
+         step's linear solve got, |f − H·c|/|f|; `step_length`: the line search's \
+         α).{}\n",
         opts.max_sweeps,
         opts.max_newton,
         opts.linear_iterations,
+        opts.max_newton,
+        opts.fas_coarsening,
+        opts.fas_sweeps,
         if opts.linear_iterations == LINEAR_ITERATIONS {
             String::new()
         } else {

@@ -7,6 +7,7 @@
 //! - [`collision`]: every contact strategy on a skirt on a turning body, at three sizes;
 //! - [`convergence`]: implicit Euler's force residual against cost, plain sweeps against
 //!   Newton steps with a multigrid preconditioner, at three particle spacings;
+//!   [`fas`] is the nonlinear multigrid (FAS) it measures beside them;
 //! - [`effects`]: what each optional effect costs per substep, on both backends;
 //! - [`fabric`]: the fabric presets in the Cusick drape and cantilever bending tests, against
 //!   published values;
@@ -19,6 +20,7 @@ pub mod collision;
 pub mod convergence;
 pub mod effects;
 pub mod fabric;
+pub mod fas;
 pub mod grid;
 pub mod integrators;
 pub mod peer;

@@ -175,6 +175,16 @@ struct ConvergenceArgs {
     #[arg(long, default_value_t = drapekit::plan::LINEAR_ITERATIONS,
           value_parser = clap::value_parser!(u32).range(1..=1024))]
     linear_iterations: u32,
+    /// The nonlinear multigrid (FAS) V-cycle's coarsening: each level the cloth meshed this many
+    /// times coarser than the one above, down to 150 particles (0 or 1: no FAS curve). A grid
+    /// level whose rows and columns less one do not divide by it is the coarsest.
+    #[arg(long, default_value_t = drapekit::bench::fas::FAS_COARSENING,
+          value_parser = clap::value_parser!(u32).range(0..=8))]
+    fas_coarsening: u32,
+    /// Vertex Block Descent sweeps on the FAS V-cycle's coarsest level in each cycle.
+    #[arg(long, default_value_t = drapekit::bench::fas::FAS_COARSE_SWEEPS,
+          value_parser = clap::value_parser!(u32).range(1..=4096))]
+    fas_sweeps: u32,
     /// Fewer frames, two spacings and short curves (a smoke test).
     #[arg(long)]
     quick: bool,
@@ -535,6 +545,8 @@ pub fn execute(b: BenchCli) -> Result<(), Error> {
                     max_newton: c.max_newton.unwrap_or(quick(12, 3)),
                     relax_frames: c.relax_frames,
                     linear_iterations: c.linear_iterations,
+                    fas_coarsening: c.fas_coarsening,
+                    fas_sweeps: c.fas_sweeps,
                     scene: c.scene,
                     out: c.out,
                 },

@@ -20,6 +20,7 @@ use crate::model::multigrid::{BlockPattern, Multigrid};
 use crate::model::{ClothModel, Csr};
 use crate::plan::SolveOp;
 use glam::{Mat3, Vec4};
+use rayon::prelude::*;
 use std::sync::Arc;
 
 /// The elements the solve gathers over.
@@ -345,6 +346,38 @@ impl Vbd {
                 return;
             }
         }
+    }
+
+    /// Every particle's force at the iterate, f = −∇G (inertia, air damping, the elements,
+    /// contact and friction at the step's planes), as a sweep's Newton step sees it; zero for
+    /// a pinned particle. Particles in parallel.
+    pub fn forces(
+        &self,
+        params: &SimParams,
+        step: &SubstepParams,
+        prev: &[Vec4],
+        out: &mut [Vec4],
+    ) {
+        let el = self.elements.view();
+        let s = Implicit {
+            params,
+            step,
+            prev,
+            target: &self.y,
+            el: &el,
+            planes: &self.planes,
+            lambdas: &self.lambdas,
+        };
+        (out.par_iter_mut().with_min_len(super::grain::VERTEX))
+            .enumerate()
+            .for_each(|(i, f)| {
+                *f = if prev[i].w == 0.0 {
+                    Vec4::ZERO
+                } else {
+                    let sys = s.vertex_system(i, &self.x, None, &mut |_, _| {});
+                    sys.force.extend(0.0)
+                };
+            });
     }
 
     /// One operation of the schedule.

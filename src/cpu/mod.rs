@@ -444,6 +444,15 @@ impl CpuSolver {
         rayon::scope(|_| v.run_ops(ops, params, step, pos, &sdfs));
     }
 
+    /// Implicit Euler's force at the current iterate, f = −∇G per particle (`Vbd::forces`):
+    /// for benchmarks and tests. Panics without implicit Euler in the plan.
+    pub fn solve_forces(&self, step: &SubstepParams) -> Vec<Vec4> {
+        let v = (self.vbd.as_ref()).expect("implicit Euler is not in the plan");
+        let mut out = vec![Vec4::ZERO; self.pos.len()];
+        v.forces(&self.params, step, &self.pos, &mut out);
+        out
+    }
+
     /// Switches self-collision to the point–triangle impulse reference (CPU only).
     pub fn use_point_triangle_reference(&mut self) {
         self.point_triangle_reference = true;
