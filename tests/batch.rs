@@ -19,6 +19,17 @@ fn batch(args: &[&str]) -> Output {
     drapekit().arg("batch").args(args).output().unwrap()
 }
 
+/// `drapekit batch MANIFEST --out OUT --backend cpu`.
+fn batch_cpu(manifest: &Path, out: &Path) -> Output {
+    batch(&[
+        manifest.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--backend",
+        "cpu",
+    ])
+}
+
 fn text(o: &Output) -> String {
     format!(
         "{}{}",
@@ -134,13 +145,7 @@ fn a_bad_manifest_reports_every_bad_line_and_runs_nothing() {
     let manifest = dir.join("m.jsonl");
     std::fs::write(&manifest, lines.join("\n")).unwrap();
     let out = dir.join("out");
-    let r = batch(&[
-        manifest.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--backend",
-        "cpu",
-    ]);
+    let r = batch_cpu(&manifest, &out);
     let msg = text(&r);
     assert_eq!(r.status.code(), Some(2), "{msg}");
     assert!(msg.contains("8 of 10 items are bad"), "{msg}");
@@ -365,13 +370,7 @@ fn a_folder_or_file_of_the_user_s_with_an_item_s_name_is_never_replaced() {
     std::fs::write(out.join("item-00/sub/notes.txt"), "mine").unwrap();
     std::fs::write(out.join("item-01"), "mine too").unwrap();
     std::fs::create_dir_all(out.join("item-02")).unwrap();
-    let r = batch(&[
-        manifest.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--backend",
-        "cpu",
-    ]);
+    let r = batch_cpu(&manifest, &out);
     let log = text(&r);
     assert_eq!(r.status.code(), Some(4), "{log}");
     assert_eq!(
@@ -414,13 +413,7 @@ fn an_item_s_warnings_name_the_item() {
     )
     .unwrap();
     let out = dir.join("out");
-    let r = batch(&[
-        manifest.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--backend",
-        "cpu",
-    ]);
+    let r = batch_cpu(&manifest, &out);
     let log = text(&r);
     assert!(r.status.success(), "{log}");
     assert!(log.contains("warning: item creeping: "), "{log}");
@@ -674,13 +667,7 @@ fn an_items_bad_input_is_located_in_the_file_that_holds_the_key() {
     )
     .unwrap();
     let out = dir.join("out");
-    let o = batch(&[
-        manifest.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--backend",
-        "cpu",
-    ]);
+    let o = batch_cpu(&manifest, &out);
     assert_eq!(o.status.code(), Some(4), "{}", text(&o));
     let message = |id: &str| {
         let e: serde_json::Value =
