@@ -789,3 +789,35 @@ fn a_fas_coarsening_the_grid_cannot_take_is_warned_and_the_other_curves_written(
         "{csv}"
     );
 }
+
+#[test]
+fn a_cloth_too_small_for_coarse_levels_is_refused_by_the_convergence_benchmark() {
+    // A 3×3 sheet has no coarser grid, so there is no Newton step to measure: a clear error
+    // (exit 2) naming the scene, not a panic.
+    let dir = out_dir("convergence_small");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(common::fixture("scenes/hanging_sheet_cotton.toml"))
+        .unwrap()
+        .replace("columns = 17", "columns = 3")
+        .replace("rows = 17", "rows = 3");
+    let scene = dir.join("small.toml");
+    std::fs::write(&scene, text).unwrap();
+    let r = drapekit(&[
+        "bench",
+        "convergence",
+        scene.to_str().unwrap(),
+        "--out",
+        dir.join("out").to_str().unwrap(),
+        "--frames",
+        "0",
+        "--refinements",
+        "1",
+    ]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("small.toml") && stderr.contains("no coarser levels"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -388,12 +388,12 @@ fn newton_steps_and_multigrid_cycles_converge_alike_at_three_resolutions_where_s
     // Nonlinear multigrid (FAS) around the same sweeps, the alternative the Newton steps were
     // chosen over: a V-cycle through the sheet meshed 2, 4, … times coarser, each cycle's
     // correction through the same line search. On the hanging sheet every cycle is taken
-    // (measured: α = 1 throughout) and helps: a cycle is 4 fine sweeps and the coarse levels'
-    // work (a third of a fine sweep's per sweep, and 64 sweeps of the ≤ 150-particle coarsest),
-    // so 4 cycles cost less than 64 plain sweeps, and at 65² they leave under half the residual
-    // 64 sweeps leave (measured 0.31 of it). But they cut it far less than Newton's thousandfold
-    // in at most 4 steps: at 65² not even a hundredfold (measured 0.25 of the start): the
-    // measurement behind shipping Newton's steps, not FAS.
+    // (measured: α = 1 throughout) and helps: at 65² a cycle's 4 fine sweeps and coarse work
+    // (each coarser level a quarter of the one above, 64 sweeps on the coarsest's 81
+    // particles) cost about 10 sweeps, so 4 cycles cost less than 64 plain sweeps, and they
+    // leave under half the residual those leave (measured 0.35 of it). But they cut it far
+    // less than Newton's thousandfold in at most 4 steps: at 65² not even a hundredfold
+    // (measured 0.34 of the start): the measurement behind shipping Newton's steps, not FAS.
     for r in [1, 2, 4] {
         let fas = curve(&rows, r, "fas");
         assert_eq!(fas.len(), 4, "{r}× finer: FAS cycles");

@@ -11,11 +11,13 @@
 //! Block Descent sweep of the same mesh, measured in the same run.
 
 use super::cpu_threads_description;
-use super::fas::{CoarseLevel, Fas, FAS_COARSENING, FAS_COARSEST_PARTICLES, FAS_COARSE_SWEEPS};
+use super::fas::{Fas, FAS_COARSENING, FAS_COARSEST_PARTICLES, FAS_COARSE_SWEEPS};
+use super::fas_levels::fas_levels;
 use crate::atomic_file::write_atomic;
 use crate::cpu::CpuSolver;
 use crate::error::{Error, InputError};
 use crate::mesh::Charted;
+use crate::model::layout::SubstepParams;
 use crate::plan::{
     newton_correction, newton_correction_block_jacobi, Pass, SolveOp, SolveShape, LINEAR_ITERATIONS,
 };
@@ -90,6 +92,19 @@ pub fn run_cli(opts: &ConvergenceOptions) -> Result<Vec<ConvergenceRow>, Error> 
     for &r in &opts.refinements {
         let fine = refined(&scene, r);
         let prep = prepare(&fine)?;
+        if prep.model.multigrid.is_none() {
+            return Err(bad(
+                &scene,
+                "multigrid",
+                &format!(
+                    "the cloth of {} particles has no coarser levels, which the Newton steps \
+                     measured here need",
+                    prep.model.len()
+                ),
+                "use a cloth of more than 40 particles (a grid of at least 4 by 4), or a finer \
+                 --refinements",
+            ));
+        }
         let mapped = map_state(&scene, &base, &state, &fine, &prep)?;
         let relax = if r == 1 { 0 } else { opts.relax_frames };
         let (relaxed, at) = continue_run(&prep, mapped, &stats, frame, relax)?;
@@ -251,6 +266,17 @@ struct Level<'a> {
     refinement: u32,
 }
 
+/// One point of a curve, before it is costed in sweeps: sweeps, steps or cycles so far, their
+/// wall time, the force residual (largest, RMS), the linear solve's residual and the step
+/// length.
+struct Point {
+    iterations: u32,
+    seconds: f64,
+    residual: (f32, f32),
+    linear: Option<f32>,
+    alpha: Option<f32>,
+}
+
 /// Every method's curve on the substep after `frame`.
 fn measure(
     level: &Level,
@@ -259,57 +285,23 @@ fn measure(
     frame: u32,
     opts: &ConvergenceOptions,
 ) -> Result<Vec<ConvergenceRow>, Error> {
-    let (prep, refinement) = (level.prep, level.refinement);
+    let prep = level.prep;
     let params = phase_params(prep, frame, stats);
     let step = substep_params(prep, frame + 1)[0];
     let mut solver = CpuSolver::new(&prep.model, params, &prep.plan);
     let shape = SolveShape::for_run(&prep.model, &params, &prep.plan);
-    let bodies = shape.bodies;
-    let fresh = |solver: &mut CpuSolver| -> Result<(), Error> {
+    let fresh = |solver: &mut CpuSolver| {
         solver.set_state(state);
         solver.run_pass(Pass::VbdInit, &step);
-        if bodies {
+        if shape.bodies {
             run_ops(solver, &[SolveOp::ContactPlanes], &step);
         }
-        Ok(())
     };
-    let row = |method, iterations, seconds: f64, sweep: f64, r: (f32, f32), linear, alpha| {
-        ConvergenceRow {
-            refinement,
-            particles: prep.model.len(),
-            method,
-            iterations,
-            sweep_equivalents: seconds / sweep,
-            seconds,
-            residual_max: r.0,
-            residual_rms: r.1,
-            linear_residual: linear,
-            step_length: alpha,
-        }
-    };
-    let mut rows = Vec::new();
-    // Plain sweeps: the residual after 1, 2, 4, … sweeps of one solve.
-    fresh(&mut solver)?;
-    let mut curve = Vec::new();
-    let (mut seconds, mut done) = (0.0, 0);
-    let mut next = 1;
-    while done < opts.max_sweeps {
-        let chunk = next - done;
-        seconds += run_ops(
-            &mut solver,
-            &vec![SolveOp::Sweep { iteration: 0 }; chunk as usize],
-            &step,
-        );
-        done = next;
-        curve.push((done, seconds, residual(&mut solver, &step)));
-        next = (next * 2).min(opts.max_sweeps);
-    }
-    let sweep = seconds / done as f64;
-    rows.extend(
-        curve
-            .into_iter()
-            .map(|(k, s, r)| row("vbd", k, s, sweep, r, None, None)),
-    );
+    fresh(&mut solver);
+    let sweeps = sweep_curve(&mut solver, &step, opts.max_sweeps);
+    let last = sweeps.last().expect("at least one sweep");
+    let sweep = last.seconds / last.iterations as f64;
+    let mut curves = vec![("vbd", sweeps)];
     // Newton steps, each after its sweeps: preconditioned by the V-cycle, and by the block
     // diagonal alone (the single-level alternative).
     let methods = [
@@ -326,128 +318,131 @@ fn measure(
         ),
     ];
     for (method, ops) in methods {
-        fresh(&mut solver)?;
+        fresh(&mut solver);
         let mut correction = vec![SolveOp::Sweep { iteration: 0 }; shape.smoothing as usize];
         correction.extend(ops);
-        // The linear solve's residual is measured (untimed) where its conjugate gradients end,
-        // before the contact filter and the line search change the correction.
-        let solved = (correction.iter())
-            .position(|&op| op == SolveOp::CorrectionFilter)
-            .unwrap_or(correction.len());
-        let (linear_solve, rest) = correction.split_at(solved);
-        let mut seconds = 0.0;
-        for k in 1..=opts.max_newton {
-            seconds += run_ops(&mut solver, linear_solve, &step);
-            let linear = linear_residual(&solver);
-            seconds += run_ops(&mut solver, rest, &step);
-            let r = residual(&mut solver, &step);
-            rows.push(row(
-                method,
-                k,
-                seconds,
-                sweep,
-                r,
-                linear,
-                last_step_length(&solver),
-            ));
-        }
+        curves.push((
+            method,
+            newton_curve(&mut solver, &step, &correction, opts.max_newton),
+        ));
     }
-    if let Some(mut fas) = fas_levels(level, stats, frame, shape.smoothing, opts)? {
-        fresh(&mut solver)?;
-        let points = fas_curve(
-            &mut fas,
-            &mut solver,
-            (state, &step),
-            shape,
-            opts.max_newton,
+    let fas = fas_levels(
+        (level.scene, level.prep),
+        (frame, stats),
+        (shape.smoothing, opts.fas_coarsening, opts.fas_sweeps),
+        chart_of,
+    )?;
+    if let Some(mut fas) = fas {
+        fresh(&mut solver);
+        let cycles = opts.max_newton;
+        curves.push((
+            "fas",
+            fas_curve(&mut fas, &mut solver, (state, &step), shape, cycles),
+        ));
+    }
+    let row = |method, p: Point| ConvergenceRow {
+        refinement: level.refinement,
+        particles: prep.model.len(),
+        method,
+        iterations: p.iterations,
+        sweep_equivalents: p.seconds / sweep,
+        seconds: p.seconds,
+        residual_max: p.residual.0,
+        residual_rms: p.residual.1,
+        linear_residual: p.linear,
+        step_length: p.alpha,
+    };
+    Ok((curves.into_iter())
+        .flat_map(|(method, points)| points.into_iter().map(move |p| row(method, p)))
+        .collect())
+}
+
+/// Plain sweeps of one solve: the residual after 1, 2, 4, … and `max` sweeps.
+fn sweep_curve(solver: &mut CpuSolver, step: &SubstepParams, max: u32) -> Vec<Point> {
+    let mut curve = Vec::new();
+    let (mut seconds, mut done) = (0.0, 0);
+    let mut next = 1;
+    while done < max {
+        let chunk = next - done;
+        seconds += run_ops(
+            solver,
+            &vec![SolveOp::Sweep { iteration: 0 }; chunk as usize],
+            step,
         );
-        for (k, seconds, r, alpha) in points {
-            rows.push(row("fas", k, seconds, sweep, r, None, Some(alpha)));
-        }
+        done = next;
+        curve.push(Point {
+            iterations: done,
+            seconds,
+            residual: residual(solver, step),
+            linear: None,
+            alpha: None,
+        });
+        next = (next * 2).min(max);
     }
-    Ok(rows)
+    curve
+}
+
+/// `steps` Newton steps, each the operations `correction` (its sweeps, then the correction).
+fn newton_curve(
+    solver: &mut CpuSolver,
+    step: &SubstepParams,
+    correction: &[SolveOp],
+    steps: u32,
+) -> Vec<Point> {
+    // The linear solve's residual is measured (untimed) where its conjugate gradients end,
+    // before the contact filter and the line search change the correction.
+    let solved = (correction.iter())
+        .position(|&op| op == SolveOp::CorrectionFilter)
+        .unwrap_or(correction.len());
+    let (linear_solve, rest) = correction.split_at(solved);
+    let mut seconds = 0.0;
+    let mut curve = Vec::new();
+    for k in 1..=steps {
+        seconds += run_ops(solver, linear_solve, step);
+        let linear = linear_residual(solver);
+        seconds += run_ops(solver, rest, step);
+        curve.push(Point {
+            iterations: k,
+            seconds,
+            residual: residual(solver, step),
+            linear,
+            alpha: last_step_length(solver),
+        });
+    }
+    curve
 }
 
 /// `cycles` FAS cycles on `solver`'s substep `step` from `state` (the solve fresh from
-/// `vbd_init`): after each, the cycles so far, their wall time, the force residual and the
-/// step length taken. A cycle is `shape.smoothing` sweeps, the coarse correction and as many
-/// sweeps again (the prolongated correction is smooth only to the coarse triangles' size; the
-/// sweeps take out what it leaves at the fine scale).
+/// `vbd_init`). A cycle is `shape.smoothing` sweeps, the coarse correction and as many sweeps
+/// again (the prolongated correction is smooth only to the coarse triangles' size; the sweeps
+/// take out what it leaves at the fine scale).
 fn fas_curve(
     fas: &mut Fas,
     solver: &mut CpuSolver,
-    (state, step): (&ParticleState, &crate::model::layout::SubstepParams),
+    (state, step): (&ParticleState, &SubstepParams),
     shape: SolveShape,
     cycles: u32,
-) -> Vec<(u32, f64, (f32, f32), f32)> {
+) -> Vec<Point> {
     let timer = Instant::now();
     fas.start(state, step, shape.bodies);
     let mut seconds = timer.elapsed().as_secs_f64();
     let sweeps = vec![SolveOp::Sweep { iteration: 0 }; shape.smoothing as usize];
-    let mut points = Vec::new();
+    let mut curve = Vec::new();
     for k in 1..=cycles {
         seconds += run_ops(solver, &sweeps, step);
         let timer = Instant::now();
         let alpha = fas.cycle(solver, step);
         seconds += timer.elapsed().as_secs_f64();
         seconds += run_ops(solver, &sweeps, step);
-        points.push((k, seconds, residual(solver, step), alpha));
-    }
-    points
-}
-
-/// The FAS V-cycle below `level`: the scene meshed `opts.fas_coarsening` times coarser, again
-/// and again until a level has at most `FAS_COARSEST_PARTICLES` (or a grid coarsens no
-/// further), each in its phase at `frame`. `None` with `--fas-coarsening 0`.
-fn fas_levels(
-    level: &Level,
-    stats: &RunStats,
-    frame: u32,
-    smoothing: u32,
-    opts: &ConvergenceOptions,
-) -> Result<Option<Fas>, Error> {
-    if opts.fas_coarsening < 2 {
-        return Ok(None);
-    }
-    let fine_chart = chart_of(level.scene, level.prep)?;
-    let dt = phase_params(level.prep, frame, stats).dt;
-    let (mut levels, mut scene, mut particles) =
-        (Vec::new(), level.scene.clone(), level.prep.model.len());
-    while particles > FAS_COARSEST_PARTICLES {
-        let Some(coarse_scene) = coarsened(&scene, opts.fas_coarsening) else {
-            break;
-        };
-        let coarse = prepare(&coarse_scene)?;
-        let params = phase_params(&coarse, frame, stats);
-        assert_eq!(params.dt, dt, "every level takes the same step");
-        particles = coarse.model.len();
-        levels.push(CoarseLevel {
-            solver: CpuSolver::new(&coarse.model, params, &coarse.plan),
-            packed: coarse.model.packed_positions(),
-            chart: chart_of(&coarse_scene, &coarse)?,
+        curve.push(Point {
+            iterations: k,
+            seconds,
+            residual: residual(solver, step),
+            linear: None,
+            alpha: Some(alpha),
         });
-        scene = coarse_scene;
     }
-    if levels.is_empty() {
-        let why = if particles > FAS_COARSEST_PARTICLES {
-            format!(
-                "the grid's rows and columns less one do not divide by --fas-coarsening {}; \
-                 give one that divides them",
-                opts.fas_coarsening
-            )
-        } else {
-            format!("it has at most {FAS_COARSEST_PARTICLES} particles, the coarsest level's size")
-        };
-        crate::notice::warn(&format!(
-            "no FAS curve for the cloth of {particles} particles: {why}"
-        ));
-    }
-    Ok(Fas::new(
-        &fine_chart,
-        levels,
-        (smoothing, opts.fas_sweeps),
-        dt,
-    ))
+    curve
 }
 
 /// The cloth's chart coordinates, or the error that it has none.
@@ -462,37 +457,13 @@ fn chart_of(scene: &Scene, prep: &Prepared) -> Result<Charted, Error> {
     })
 }
 
-/// The scene with its particle spacing multiplied by `factor` (`None` for a grid whose rows
-/// or columns do not coarsen by it).
-fn coarsened(scene: &Scene, factor: u32) -> Option<Scene> {
-    let mut s = scene.clone();
-    match &mut s.cloth {
-        ClothSource::Pattern { options, .. } => options.particle_distance *= factor as f64,
-        ClothSource::Grid { columns, rows, .. } => {
-            if (*columns - 1) % factor != 0 || (*rows - 1) % factor != 0 {
-                return None;
-            }
-            *columns = (*columns - 1) / factor + 1;
-            *rows = (*rows - 1) / factor + 1;
-        }
-        ClothSource::Mesh { .. } => return None,
-    }
-    // Its Newton arrays hold its correction and line search when a coarser level corrects it.
-    s.solver.multigrid = true;
-    Some(s)
-}
-
 /// Conjugate-gradient iterations per Newton step with the block-Jacobi preconditioner: a
 /// one-level preconditioner needs iterations in proportion to the cloth's width in particles to
 /// carry load across it (64: the 2 cm T-shirt is about 30 rings from shoulder to hem).
 pub const BLOCK_JACOBI_ITERATIONS: u32 = 64;
 
 /// Runs `ops` on the solver's implicit solve and returns their wall time.
-fn run_ops(
-    solver: &mut CpuSolver,
-    ops: &[SolveOp],
-    step: &crate::model::layout::SubstepParams,
-) -> f64 {
+fn run_ops(solver: &mut CpuSolver, ops: &[SolveOp], step: &SubstepParams) -> f64 {
     let start = Instant::now();
     solver.run_solve_ops(ops, step);
     start.elapsed().as_secs_f64()
@@ -518,7 +489,7 @@ fn last_step_length(solver: &CpuSolver) -> Option<f32> {
 }
 
 /// The force residual at the iterate (not timed).
-fn residual(solver: &mut CpuSolver, step: &crate::model::layout::SubstepParams) -> (f32, f32) {
+fn residual(solver: &mut CpuSolver, step: &SubstepParams) -> (f32, f32) {
     solver.run_solve_ops(&[SolveOp::ForceResidual], step);
     solver.vbd.as_ref().map_or((0.0, 0.0), |v| v.residual)
 }
@@ -644,19 +615,14 @@ fn report(opts: &ConvergenceOptions, rows: &[ConvergenceRow], frame: u32) -> Str
         "\nVBD ran at most {} sweeps; Newton at most {} steps, each with {} \
          conjugate-gradient iterations preconditioned by a multigrid V-cycle, or with \
          {BLOCK_JACOBI_ITERATIONS} \
-         preconditioned by the block diagonal. FAS: at most {} V-cycles of nonlinear \
-         multigrid around the sweeps, each level the cloth meshed {}× coarser down to at most \
-         {FAS_COARSEST_PARTICLES} particles, {} sweeps on the coarsest, the correction taken \
-         through the same line search (a refused cycle is its sweeps alone). The full curves \
-         are in convergence.csv and convergence.svg (`linear_residual`: how far each Newton \
-         step's linear solve got, |f − H·c|/|f|; `step_length`: the line search's \
-         α).{}\n",
+         preconditioned by the block diagonal, each after the scene's `smoothing_sweeps` \
+         sweeps.{} The full curves are \
+         in convergence.csv and convergence.svg (`linear_residual`: how far each Newton \
+         step's linear solve got, |f − H·c|/|f|; `step_length`: the line search's α).{}\n",
         opts.max_sweeps,
         opts.max_newton,
         opts.linear_iterations,
-        opts.max_newton,
-        opts.fas_coarsening,
-        opts.fas_sweeps,
+        fas_note(opts),
         if opts.linear_iterations == LINEAR_ITERATIONS {
             String::new()
         } else {
@@ -667,6 +633,21 @@ fn report(opts: &ConvergenceOptions, rows: &[ConvergenceRow], frame: u32) -> Str
         }
     );
     md
+}
+
+/// The report's sentence on the FAS curve, if there is one.
+fn fas_note(opts: &ConvergenceOptions) -> String {
+    if opts.fas_coarsening < 2 {
+        return String::new();
+    }
+    format!(
+        " FAS: at most {} V-cycles of nonlinear multigrid, each between those sweeps and as \
+         many again, each level the cloth meshed {}× coarser, down to at most \
+         {FAS_COARSEST_PARTICLES} particles or the first level with no coarse levels of its \
+         own, {} sweeps on the coarsest, the correction taken through the Newton step's line \
+         search (a refused cycle is its sweeps alone).",
+        opts.max_newton, opts.fas_coarsening, opts.fas_sweeps
+    )
 }
 
 fn plot(rows: &[ConvergenceRow], path: &Path) -> Result<(), Error> {

@@ -27,7 +27,7 @@ pub const FAS_COARSENING: u32 = 2;
 /// Sweeps on the coarsest level each cycle, by default.
 pub const FAS_COARSE_SWEEPS: u32 = 64;
 
-/// A level no coarser than this many particles is the coarsest.
+/// A level of at most this many particles is the coarsest.
 pub const FAS_COARSEST_PARTICLES: usize = 150;
 
 /// One coarse level of a FAS V-cycle, for one substep, and the levels below it.
@@ -188,8 +188,10 @@ impl Fas {
 }
 
 /// Takes the correction `c` (one per particle) on `solver`'s iterate through the contact
-/// filter and the line search on its G, as a Newton step's, its force at the iterate `force`
-/// standing in for the assembled one (the line search's slopes read it). Returns α.
+/// filter and the line search on its G, as a Newton step's. The line search's slope at the
+/// iterate reads `force`: here f = −∇G itself, so G′(0) = −f·c exactly (a Newton step gives
+/// the assembled force, filtered at touching particles as its correction is), as the slope at
+/// the full step is taken from the unfiltered force too. Returns α.
 fn take_correction(
     solver: &mut CpuSolver,
     c: &[glam::Vec3],

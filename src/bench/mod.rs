@@ -21,6 +21,7 @@ pub mod convergence;
 pub mod effects;
 pub mod fabric;
 pub mod fas;
+mod fas_levels;
 pub mod grid;
 pub mod integrators;
 pub mod peer;

@@ -166,7 +166,7 @@ struct ConvergenceArgs {
     /// Frames a finer mesh runs from the carried state before its measured substep.
     #[arg(long, default_value_t = 2)]
     relax_frames: u32,
-    /// The most Newton steps (default 12; 3 with --quick).
+    /// The most Newton steps, and FAS cycles (default 12; 3 with --quick).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_ITERATIONS as i64))]
     max_newton: Option<u32>,
     /// Conjugate-gradient iterations in each measured multigrid Newton step (the run before the
@@ -176,8 +176,9 @@ struct ConvergenceArgs {
           value_parser = clap::value_parser!(u32).range(1..=1024))]
     linear_iterations: u32,
     /// The nonlinear multigrid (FAS) V-cycle's coarsening: each level the cloth meshed this many
-    /// times coarser than the one above, down to 150 particles (0 or 1: no FAS curve). A grid
-    /// level whose rows and columns less one do not divide by it is the coarsest.
+    /// times coarser than the one above, down to 150 particles (0 or 1: no FAS curve). Where
+    /// the cloth coarsens no further (a grid's rows or columns less one that it does not
+    /// divide), the V-cycle stops there, with a warning.
     #[arg(long, default_value_t = drapekit::bench::fas::FAS_COARSENING,
           value_parser = clap::value_parser!(u32).range(0..=8))]
     fas_coarsening: u32,

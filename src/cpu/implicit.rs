@@ -349,8 +349,9 @@ impl Vbd {
     }
 
     /// Every particle's force at the iterate, f = −∇G (inertia, air damping, the elements,
-    /// contact and friction at the step's planes), as a sweep's Newton step sees it; zero for
-    /// a pinned particle. Particles in parallel.
+    /// contact and friction at the step's planes), each from the same iterate (a sweep's step
+    /// sees the neighbours its colours before it moved); zero for a pinned particle.
+    /// Particles in parallel.
     pub fn forces(
         &self,
         params: &SimParams,

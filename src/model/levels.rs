@@ -16,7 +16,7 @@ pub const COARSEST_PARTICLES: usize = 40;
 
 /// A coarser level must have at most this fraction of the particles of the level below it,
 /// or coarsening stops (small panels stop shrinking once their outline sets their particles).
-const MIN_REDUCTION: f64 = 0.6;
+pub const MIN_REDUCTION: f64 = 0.6;
 
 impl Scene {
     /// The multigrid hierarchy of the scene's cloth (`model`, with `garment` for patterns):

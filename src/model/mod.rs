@@ -9,7 +9,7 @@ mod collider;
 mod coloring;
 mod deforming;
 pub mod layout;
-mod levels;
+pub mod levels;
 pub mod membrane;
 pub mod multigrid;
 
