@@ -22,6 +22,31 @@ pub fn as_item<T>(id: &str, f: impl FnOnce() -> T) -> T {
     f()
 }
 
+/// Names the batch item in the report of a panic on its thread: installs, once, a panic hook
+/// that reports such a panic as one line, `drapekit: item ID: panicked at FILE:LINE: MESSAGE`,
+/// and hands a panic on any other thread to the hook that was there (Rust's report, with its
+/// backtrace when asked for: rerun the item's scene alone with `drapekit run` for that).
+pub fn label_panics() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            let label = label();
+            if label.is_empty() {
+                return previous(info);
+            }
+            let at = info
+                .location()
+                .map_or(String::new(), |l| format!(" at {l}"));
+            let payload = info.payload();
+            let message = (payload.downcast_ref::<&str>().copied())
+                .or_else(|| payload.downcast_ref::<String>().map(String::as_str))
+                .unwrap_or("(no message)");
+            eprintln!("drapekit: {label}panicked{at}: {message}");
+        }));
+    });
+}
+
 /// A warning on stderr: `drapekit: warning: [item ID: ]w`.
 pub fn warn(w: &str) {
     eprintln!("drapekit: warning: {}{w}", label());

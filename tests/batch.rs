@@ -729,3 +729,36 @@ fn a_batch_on_a_one_thread_pool_finishes() {
     assert!(status.success());
     assert_eq!(summaries(&out).len(), 1);
 }
+
+#[test]
+fn a_panic_on_a_batch_item_s_thread_is_reported_with_the_item() {
+    // A panic hook is the whole process's: the panics run in a child, this test binary itself.
+    if std::env::var_os("DRAPEKIT_PANIC_CHILD").is_some() {
+        drapekit::notice::label_panics();
+        let item = std::panic::catch_unwind(|| {
+            drapekit::notice::as_item("shirt-7", || panic!("boom {}", 6 * 7))
+        });
+        assert!(item.is_err());
+        // Off an item's thread (or after its item unwound), Rust's own report.
+        let plain = std::panic::catch_unwind(|| panic!("plain"));
+        assert!(plain.is_err());
+        return;
+    }
+    let name = "a_panic_on_a_batch_item_s_thread_is_reported_with_the_item";
+    let child = Command::new(std::env::current_exe().unwrap())
+        .args([name, "--exact", "--nocapture", "--test-threads", "1"])
+        .env("DRAPEKIT_PANIC_CHILD", "1")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&child.stderr);
+    assert!(child.status.success(), "{stderr}");
+    let item: Vec<&str> = (stderr.lines())
+        .filter(|l| l.starts_with("drapekit: item shirt-7: panicked at tests/batch.rs:"))
+        .collect();
+    assert_eq!(item.len(), 1, "{stderr}");
+    assert!(item[0].ends_with(": boom 42"), "{stderr}");
+    assert!(
+        stderr.contains("panicked at tests/batch.rs:") && stderr.lines().any(|l| l == "plain"),
+        "the unlabelled panic keeps Rust's report: {stderr}"
+    );
+}

@@ -105,6 +105,8 @@ pub fn run(
     log: &(dyn Fn(&str) + Sync),
 ) -> Result<BatchResult, Error> {
     let cli = Path::new("drapekit batch");
+    // A panicking item is this item's failure (`item::attempt`); its report names the item.
+    crate::notice::label_panics();
     let (shard, source) = shard::resolve(opts.shard, opts.shards, env)
         .map_err(|e| InputError::new(cli, "--shard", e, "see `drapekit batch --help`"))?;
     let jobs_wanted = jobs(opts.jobs, opts.item.backend)?;
