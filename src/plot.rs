@@ -32,18 +32,20 @@ pub fn log_log_svg(
             Error::io(path, std::io::Error::other(format!("plotting failed: {e}")))
         };
         root.fill(&WHITE).map_err(draw)?;
+        let x_range = (x_lo / 1.5, x_hi * 1.5);
+        let (corner, y_range) = legend_place(series, x_range, (y_lo / 2.0, y_hi * 2.0));
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 20))
             .margin(16)
             .x_label_area_size(48)
             .y_label_area_size(80)
             .build_cartesian_2d(
-                (x_lo / 1.5..x_hi * 1.5)
+                (x_range.0..x_range.1)
                     .log_scale()
-                    .with_key_points(ticks(x_lo / 1.5, x_hi * 1.5)),
-                (y_lo / 2.0..y_hi * 2.0)
+                    .with_key_points(ticks(x_range.0, x_range.1)),
+                (y_range.0..y_range.1)
                     .log_scale()
-                    .with_key_points(ticks(y_lo / 2.0, y_hi * 2.0)),
+                    .with_key_points(ticks(y_range.0, y_range.1)),
             )
             .map_err(draw)?;
         chart
@@ -67,7 +69,6 @@ pub fn log_log_svg(
                 .draw_series(s.points.iter().map(|&p| Circle::new(p, 4, color.filled())))
                 .map_err(draw)?;
         }
-        let corner = emptiest_corner(series, (x_lo / 1.5, x_hi * 1.5), (y_lo / 2.0, y_hi * 2.0));
         chart
             .configure_series_labels()
             .position(corner)
@@ -80,10 +81,29 @@ pub fn log_log_svg(
     write_atomic(path, svg.as_bytes())
 }
 
-/// The corner of the log–log plot with the fewest points under where the legend would sit
-/// (about a quarter of the width and 30% of the height; lines sampled between their points);
-/// lower right on a tie.
-fn emptiest_corner(series: &[Series], x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+/// The share of the plotting area's width and height that the legend of `series` takes
+/// (about 16 px a row and 6.5 px a character of the 900 × 560 plot's area of about 790 × 440).
+fn legend_size(series: &[Series]) -> (f64, f64) {
+    let longest = series
+        .iter()
+        .map(|s| s.name.chars().count())
+        .max()
+        .unwrap_or(0);
+    let width = (40.0 + 6.5 * longest as f64) / 790.0;
+    let height = (10.0 + 16.0 * series.len() as f64) / 440.0;
+    (width.min(1.0), height.min(0.9))
+}
+
+/// Where the legend goes, and the y range that leaves it room: the corner of the log–log plot
+/// with the fewest points under the legend (lines sampled between their points; lower right
+/// on a tie), and, where every corner has some, the y range `y` grown on that corner's side
+/// until the data clears the legend's height (many series make a legend taller than any
+/// free corner).
+fn legend_place(
+    series: &[Series],
+    x: (f64, f64),
+    y: (f64, f64),
+) -> (SeriesLabelPosition, (f64, f64)) {
     let unit = |v: f64, (lo, hi): (f64, f64)| (v / lo).ln() / (hi / lo).ln();
     let mut at = Vec::new();
     for s in series {
@@ -99,23 +119,38 @@ fn emptiest_corner(series: &[Series], x: (f64, f64), y: (f64, f64)) -> SeriesLab
         }
         at.extend(s.points.last().copied());
     }
+    let (width, height) = legend_size(series);
     let corners = [
         (SeriesLabelPosition::LowerRight, (true, false)),
         (SeriesLabelPosition::UpperLeft, (false, true)),
         (SeriesLabelPosition::UpperRight, (true, true)),
         (SeriesLabelPosition::LowerLeft, (false, false)),
     ];
-    let near = |(right, top): (bool, bool)| {
-        (at.iter())
-            .filter(|&&(px, py)| {
-                let (u, v) = (unit(px, x), unit(py, y));
-                (if right { u > 0.75 } else { u < 0.25 }) && (if top { v > 0.7 } else { v < 0.3 })
-            })
-            .count()
+    let under = |(right, top): (bool, bool)| {
+        (at.iter()).filter(move |&&(px, py)| {
+            let (u, v) = (unit(px, x), unit(py, y));
+            (if right { u > 1.0 - width } else { u < width })
+                && (if top { v > 1.0 - height } else { v < height })
+        })
     };
-    (corners.into_iter())
-        .min_by_key(|&(_, c)| near(c))
-        .map_or(SeriesLabelPosition::LowerRight, |(p, _)| p)
+    let (corner, (right, top)) = (corners.into_iter())
+        .min_by_key(|&(_, c)| under(c).count())
+        .unwrap_or((SeriesLabelPosition::LowerRight, (true, false)));
+    let (ln_lo, ln_hi) = (y.0.ln(), y.1.ln());
+    // The data under the legend, in ln y: the axis grows until it clears the legend's height.
+    let mut y = y;
+    for (_, py) in under((right, top)) {
+        let v = py.ln();
+        if top {
+            // (ln y_hi' − v) / (ln y_hi' − ln y_lo) = height.
+            let hi = (v - height * ln_lo) / (1.0 - height);
+            y.1 = y.1.max(hi.exp());
+        } else {
+            let lo = (v - height * ln_hi) / (1.0 - height);
+            y.0 = y.0.min(lo.exp());
+        }
+    }
+    (corner, y)
 }
 
 /// 1, 2 and 5 times the powers of ten between `lo` and `hi`: tick marks for log axes.
@@ -351,4 +386,55 @@ pub fn trade_off_svg(
         root.present().map_err(draw)?;
     }
     write_atomic(path, svg.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_legend_taller_than_any_free_corner_gets_room_below_the_data() {
+        // Twelve series, each round the square of the data's four corners: every corner of the
+        // plot holds as many points, and the legend (12 rows, about 45% of the height) fits
+        // none.
+        let corners = vec![
+            (1.0, 1.0),
+            (100.0, 1.0),
+            (100.0, 100.0),
+            (1.0, 100.0),
+            (1.0, 1.0),
+        ];
+        let series: Vec<Series> = (0..12)
+            .map(|k| Series {
+                name: format!("series {k}"),
+                points: corners.clone(),
+            })
+            .collect();
+        let (x, y) = ((1.0 / 1.5, 150.0), (0.5, 200.0));
+        let (corner, grown) = legend_place(&series, x, y);
+        assert_eq!(
+            corner,
+            SeriesLabelPosition::LowerRight,
+            "a tie goes lower right"
+        );
+        // The data's lowest point, 1.0, now sits above the legend's height on the grown axis.
+        let (_, height) = legend_size(&series);
+        let v = (1.0f64 / grown.0).ln() / (grown.1 / grown.0).ln();
+        assert!(grown.1 == y.1 && grown.0 < y.0, "{grown:?}");
+        assert!(
+            (v - height).abs() < 1e-9,
+            "the lowest point at {v}, the legend {height}"
+        );
+    }
+
+    #[test]
+    fn a_legend_that_fits_a_free_corner_leaves_the_axes_alone() {
+        // One falling line and a one-row legend: some corner is free, and the axes stay.
+        let series = vec![Series {
+            name: "falling".into(),
+            points: vec![(1.0, 100.0), (10.0, 10.0), (100.0, 1.0)],
+        }];
+        let y = (0.5, 200.0);
+        assert_eq!(legend_place(&series, (1.0 / 1.5, 150.0), y).1, y);
+    }
 }
