@@ -11,13 +11,14 @@
 //! Block Descent sweep of the same mesh, measured in the same run.
 
 use super::cpu_threads_description;
-use super::fas::{Fas, FAS_COARSENING, FAS_COARSEST_PARTICLES, FAS_COARSE_SWEEPS};
+use super::fas::{carried, Fas, FAS_COARSENING, FAS_COARSEST_PARTICLES, FAS_COARSE_SWEEPS};
 use super::fas_levels::fas_levels;
 use crate::atomic_file::write_atomic;
 use crate::cpu::CpuSolver;
 use crate::error::{Error, InputError};
 use crate::mesh::Charted;
 use crate::model::layout::SubstepParams;
+use crate::pattern::transfer::Transfer;
 use crate::plan::{
     newton_correction, newton_correction_block_jacobi, Pass, SolveOp, SolveShape, LINEAR_ITERATIONS,
 };
@@ -230,32 +231,8 @@ fn map_state(
     fine_scene: &Scene,
     fine: &Prepared,
 ) -> Result<ParticleState, Error> {
-    let (Some(from), Some(to)) = (charted(scene, base), charted(fine_scene, fine)) else {
-        return Err(bad(
-            scene,
-            "multigrid",
-            "the cloth has no chart coordinates to carry its state between meshings",
-            "use a grid or pattern cloth",
-        ));
-    };
-    let transfer = crate::pattern::transfer::Transfer::between(&from, &to);
-    let positions = transfer.apply(&state.positions);
-    let velocities = transfer.apply(&state.velocities);
-    let packed = fine.model.packed_positions();
-    Ok(ParticleState {
-        positions: (positions.iter().zip(&packed))
-            .map(|(p, q)| if q.w == 0.0 { *q } else { p.extend(q.w) })
-            .collect(),
-        velocities: (velocities.iter().zip(&packed))
-            .map(|(v, q)| {
-                if q.w == 0.0 {
-                    glam::Vec4::ZERO
-                } else {
-                    v.extend(0.0)
-                }
-            })
-            .collect(),
-    })
+    let transfer = Transfer::between(&chart_of(scene, base)?, &chart_of(fine_scene, fine)?);
+    Ok(carried(&transfer, state, &fine.model.packed_positions()))
 }
 
 /// The meshing a curve is measured on.

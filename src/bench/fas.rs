@@ -95,24 +95,7 @@ impl Fas {
     /// velocities): each level's start restricted from the one above (pinned particles where
     /// its model puts them), its inertial target and, with `bodies`, its contact planes.
     pub fn start(&mut self, fine: &ParticleState, step: &SubstepParams, bodies: bool) {
-        let (pos, vel) = (
-            self.down.apply(&fine.positions),
-            self.down.apply(&fine.velocities),
-        );
-        let state = ParticleState {
-            positions: (pos.iter().zip(&self.packed))
-                .map(|(p, q)| if q.w == 0.0 { *q } else { p.extend(q.w) })
-                .collect(),
-            velocities: (vel.iter().zip(&self.packed))
-                .map(|(v, q)| {
-                    if q.w == 0.0 {
-                        Vec4::ZERO
-                    } else {
-                        v.extend(0.0)
-                    }
-                })
-                .collect(),
-        };
+        let state = carried(&self.down, fine, &self.packed);
         self.coarse.set_state(&state);
         self.coarse.run_pass(Pass::VbdInit, step);
         if bodies {
@@ -184,6 +167,25 @@ impl Fas {
             next.cycle(&mut self.coarse, step);
             self.coarse.run_solve_ops(&sweeps, step);
         }
+    }
+}
+
+/// `state` carried through `transfer` onto the particles of the meshing whose packed positions
+/// are `packed`: each position and velocity blended, pinned particles where the model puts
+/// them, at rest.
+pub fn carried(transfer: &Transfer, state: &ParticleState, packed: &[Vec4]) -> ParticleState {
+    let (positions, velocities) = (
+        transfer.apply(&state.positions),
+        transfer.apply(&state.velocities),
+    );
+    let pinned = |q: &Vec4| q.w == 0.0;
+    ParticleState {
+        positions: (positions.iter().zip(packed))
+            .map(|(p, q)| if pinned(q) { *q } else { p.extend(q.w) })
+            .collect(),
+        velocities: (velocities.iter().zip(packed))
+            .map(|(v, q)| if pinned(q) { Vec4::ZERO } else { v.extend(0.0) })
+            .collect(),
     }
 }
 
