@@ -11,20 +11,19 @@
 //! Block Descent sweep of the same mesh, measured in the same run.
 
 use super::cpu_threads_description;
-use super::fas::{carried, Fas, FAS_COARSENING, FAS_COARSEST_PARTICLES, FAS_COARSE_SWEEPS};
+use super::fas::{Fas, FAS_COARSENING, FAS_COARSEST_PARTICLES, FAS_COARSE_SWEEPS};
 use super::fas_levels::fas_levels;
+use super::measured_state::{chart_of, continue_run, map_state, refined, representative_state};
 use crate::atomic_file::write_atomic;
 use crate::cpu::CpuSolver;
 use crate::error::{Error, InputError};
-use crate::mesh::Charted;
 use crate::model::layout::SubstepParams;
-use crate::pattern::transfer::Transfer;
 use crate::plan::{
     newton_correction, newton_correction_block_jacobi, Pass, SolveOp, SolveShape, LINEAR_ITERATIONS,
 };
 use crate::plot::{log_log_svg, Series};
 use crate::scene::{ClothSource, Scene, INTEGRATOR_IMPLICIT};
-use crate::sim::{phase_params, prepare, simulate, substep_params, Prepared, RunStats};
+use crate::sim::{phase_params, prepare, substep_params, Prepared, RunStats};
 use crate::solver::{ParticleState, Solver};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -106,7 +105,7 @@ pub fn run_cli(opts: &ConvergenceOptions) -> Result<Vec<ConvergenceRow>, Error> 
                  --refinements",
             ));
         }
-        let mapped = map_state(&scene, &base, &state, &fine, &prep)?;
+        let mapped = map_state((&scene, &base), &state, (&fine, &prep), frame)?;
         let relax = if r == 1 { 0 } else { opts.relax_frames };
         let (relaxed, at) = continue_run(&prep, mapped, &stats, frame, relax)?;
         let level = Level {
@@ -148,91 +147,6 @@ fn check_scene(scene: &Scene) -> Result<(), Error> {
         )));
     }
     Ok(())
-}
-
-/// The scene with its particle spacing divided by `r`.
-fn refined(scene: &Scene, r: u32) -> Scene {
-    let mut s = scene.clone();
-    match &mut s.cloth {
-        ClothSource::Pattern { options, .. } => options.particle_distance /= r as f64,
-        ClothSource::Grid { columns, rows, .. } => {
-            *columns = (*columns - 1) * r + 1;
-            *rows = (*rows - 1) * r + 1;
-        }
-        ClothSource::Mesh { .. } => {}
-    }
-    s.solver.multigrid = true;
-    s.solver.strain_limit = None;
-    s
-}
-
-/// The scene run on the CPU to its representative frame: its prepared run, the state, the run's
-/// stats and the frame.
-fn representative_state(
-    scene: &Scene,
-    frames: Option<u32>,
-) -> Result<(Prepared, ParticleState, RunStats, u32), Error> {
-    let mut prep = prepare(&refined(scene, 1))?;
-    if let Some(f) = frames {
-        prep.frames = f;
-        prep.settle_speed = None;
-    }
-    let mut solver = CpuSolver::new(&prep.model, prep.params, &prep.plan);
-    let mut stats = RunStats::default();
-    let mut last = solver.state()?;
-    simulate(&prep, &mut solver, &mut stats, |_, s| {
-        last = s.clone();
-        Ok(())
-    })?;
-    let frame = stats.frames_run;
-    Ok((prep, last, stats, frame))
-}
-
-/// `frames` more frames of `prep` from `state` at the end of frame `frame`: the state then, and
-/// the frame.
-fn continue_run(
-    prep: &Prepared,
-    state: ParticleState,
-    stats: &RunStats,
-    frame: u32,
-    frames: u32,
-) -> Result<(ParticleState, u32), Error> {
-    if frames == 0 {
-        return Ok((state, frame));
-    }
-    let params = phase_params(prep, frame, stats);
-    let mut solver = CpuSolver::new(&prep.model, params, &prep.plan);
-    solver.set_state(&state);
-    for f in frame + 1..=frame + frames {
-        solver.advance(&substep_params(prep, f))?;
-    }
-    Ok((solver.state()?, frame + frames))
-}
-
-/// The cloth's chart coordinates (pattern panels or grid plane).
-fn charted(scene: &Scene, prep: &Prepared) -> Option<Charted> {
-    match &scene.cloth {
-        ClothSource::Grid {
-            width,
-            height,
-            columns,
-            rows,
-            ..
-        } => Some(Charted::grid(*width, *height, *columns, *rows)),
-        _ => prep.garment.as_ref().map(|g| g.charted()),
-    }
-}
-
-/// `state` of the scene's own meshing carried onto `fine`'s particles through the charts.
-fn map_state(
-    scene: &Scene,
-    base: &Prepared,
-    state: &ParticleState,
-    fine_scene: &Scene,
-    fine: &Prepared,
-) -> Result<ParticleState, Error> {
-    let transfer = Transfer::between(&chart_of(scene, base)?, &chart_of(fine_scene, fine)?);
-    Ok(carried(&transfer, state, &fine.model.packed_positions()))
 }
 
 /// The meshing a curve is measured on.
@@ -420,18 +334,6 @@ fn fas_curve(
         });
     }
     curve
-}
-
-/// The cloth's chart coordinates, or the error that it has none.
-fn chart_of(scene: &Scene, prep: &Prepared) -> Result<Charted, Error> {
-    charted(scene, prep).ok_or_else(|| {
-        bad(
-            scene,
-            "multigrid",
-            "the cloth has no chart coordinates to carry its state between meshings",
-            "use a grid or pattern cloth",
-        )
-    })
 }
 
 /// Conjugate-gradient iterations per Newton step with the block-Jacobi preconditioner: a

@@ -18,6 +18,7 @@ use crate::cpu::{CpuSolver, Vbd};
 use crate::model::layout::SubstepParams;
 use crate::pattern::transfer::{Charted, Transfer};
 use crate::plan::{Pass, SolveOp};
+use crate::sim::carried;
 use crate::solver::{ParticleState, Solver};
 use glam::Vec4;
 
@@ -167,25 +168,6 @@ impl Fas {
             next.cycle(&mut self.coarse, step);
             self.coarse.run_solve_ops(&sweeps, step);
         }
-    }
-}
-
-/// `state` carried through `transfer` onto the particles of the meshing whose packed positions
-/// are `packed`: each position and velocity blended, pinned particles where the model puts
-/// them, at rest.
-pub fn carried(transfer: &Transfer, state: &ParticleState, packed: &[Vec4]) -> ParticleState {
-    let (positions, velocities) = (
-        transfer.apply(&state.positions),
-        transfer.apply(&state.velocities),
-    );
-    let pinned = |q: &Vec4| q.w == 0.0;
-    ParticleState {
-        positions: (positions.iter().zip(packed))
-            .map(|(p, q)| if pinned(q) { *q } else { p.extend(q.w) })
-            .collect(),
-        velocities: (velocities.iter().zip(packed))
-            .map(|(v, q)| if pinned(q) { Vec4::ZERO } else { v.extend(0.0) })
-            .collect(),
     }
 }
 

@@ -7,7 +7,7 @@ use crate::error::Error;
 use crate::mesh::Charted;
 use crate::model::levels::MIN_REDUCTION;
 use crate::scene::{ClothSource, Scene};
-use crate::sim::{phase_params, prepare, Prepared, RunStats};
+use crate::sim::{packed_at, phase_params, prepare, Prepared, RunStats};
 
 /// The FAS V-cycle below the scene `scene` as `prep` prepared it: the scene meshed
 /// `coarsening` times coarser, again and again, each level in its phase at `frame` of the run
@@ -52,7 +52,7 @@ pub fn fas_levels(
         let has_levels = coarse.model.multigrid.is_some();
         levels.push(CoarseLevel {
             solver: CpuSolver::new(&coarse.model, params, &coarse.plan),
-            packed: coarse.model.packed_positions(),
+            packed: packed_at(&coarse, frame),
             chart: chart_of(&coarse_scene, &coarse)?,
         });
         scene = coarse_scene;

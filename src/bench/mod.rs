@@ -24,6 +24,7 @@ pub mod fas;
 mod fas_levels;
 pub mod grid;
 pub mod integrators;
+mod measured_state;
 pub mod peer;
 mod peer_report;
 pub mod profile;

@@ -7,6 +7,7 @@
 use super::Prepared;
 use crate::pattern::transfer::Transfer;
 use crate::solver::ParticleState;
+use glam::Vec4;
 use serde::{Deserialize, Serialize};
 
 /// What the coarse start did, for the summary.
@@ -43,27 +44,25 @@ pub fn map_state(
     frame: u32,
 ) -> Option<(ParticleState, f32)> {
     let transfer = Transfer::new(coarse.garment.as_ref()?, fine.garment.as_ref()?);
-    let positions = transfer.apply(&state.positions);
-    let velocities = transfer.apply(&state.velocities);
-    let model = &fine.model;
-    let mut held: Vec<bool> = model.masses.iter().map(|&m| m <= 0.0).collect();
-    let attached = (frame < fine.attach_frames).then_some(&fine.attached[..]);
-    for &i in fine.scene_pins.iter().chain(attached.unwrap_or(&[])) {
-        held[i as usize] = true;
-    }
-    let mut mapped = ParticleState {
-        positions: Vec::with_capacity(positions.len()),
-        velocities: Vec::with_capacity(positions.len()),
-    };
-    for (i, (p, v)) in positions.into_iter().zip(velocities).enumerate() {
-        if held[i] {
-            // Held particles keep their own place: a pin is where the scene put it.
-            mapped.positions.push(model.positions[i].extend(0.0));
-            mapped.velocities.push(glam::Vec4::ZERO);
-        } else {
-            mapped.positions.push(p.extend(1.0 / model.masses[i]));
-            mapped.velocities.push(v.extend(0.0));
-        }
-    }
+    let mapped = carried(&transfer, state, &super::packed_at(fine, frame));
     Some((mapped, transfer.max_gap_m))
+}
+
+/// `state` carried through `transfer` onto the particles of the meshing whose packed positions
+/// are `packed` (`packed_at` the state's frame): each position and velocity blended, with the
+/// particle's inverse mass; held particles (w = 0) where the model puts them, at rest.
+pub fn carried(transfer: &Transfer, state: &ParticleState, packed: &[Vec4]) -> ParticleState {
+    let (positions, velocities) = (
+        transfer.apply(&state.positions),
+        transfer.apply(&state.velocities),
+    );
+    let pinned = |q: &Vec4| q.w == 0.0;
+    ParticleState {
+        positions: (positions.iter().zip(packed))
+            .map(|(p, q)| if pinned(q) { *q } else { p.extend(q.w) })
+            .collect(),
+        velocities: (velocities.iter().zip(packed))
+            .map(|(v, q)| if pinned(q) { Vec4::ZERO } else { v.extend(0.0) })
+            .collect(),
+    }
 }

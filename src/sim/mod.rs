@@ -8,6 +8,7 @@ use crate::model::layout::{
     BodyParams, BodyPose, SimParams, SubstepParams, INTEGRATOR_IMPLICIT, MAX_BODIES,
 };
 
+mod attach;
 mod bodies;
 mod coarse;
 mod explosion;
@@ -21,8 +22,10 @@ use crate::pattern::garment::Garment;
 use crate::plan::PassPlan;
 use crate::scene::{ClothSource, Scene, Wind};
 use crate::solver::{ParticleState, Solver};
+pub use attach::packed_at;
+pub(crate) use attach::release;
 pub use bodies::{body_pose, part_poses};
-pub use coarse::{map_state, CoarseStart};
+pub use coarse::{carried, map_state, CoarseStart};
 use settle::frame_speed;
 pub use settle::Settled;
 pub use stats::{FrameRecord, RunStats};
@@ -400,22 +403,6 @@ pub fn substep_params(prep: &Prepared, frame: u32) -> Vec<SubstepParams> {
 /// in tshirt_drape (1 cm cells, 3 mm thickness) they lie 1.5 to 3.5 mm from the exact mesh.
 pub const CONTACT_SLACK: f32 = 1e-3;
 
-/// Gives attached particles their inverse mass back (pins from the scene stay pinned).
-fn release(
-    prep: &Prepared,
-    solver: &mut dyn Solver,
-    mut state: ParticleState,
-) -> Result<(), Error> {
-    for &i in &prep.attached {
-        let i = i as usize;
-        if !prep.scene_pins.contains(&(i as u32)) && prep.model.masses[i] > 0.0 {
-            state.positions[i].w = 1.0 / prep.model.masses[i];
-        }
-    }
-    solver.set_state(&state);
-    Ok(())
-}
-
 /// Runs `prep.frames` output frames on `solver`, calling `on_frame` with each finite frame
 /// (frame 0 is the initial state). A non-finite frame stops the run with an error naming the
 /// frame and the first bad particle; `on_frame` never sees it.
@@ -673,7 +660,7 @@ fn after_frame(
     state: ParticleState,
 ) -> Result<bool, Error> {
     if frame == prep.attach_frames && !prep.attached.is_empty() {
-        release(prep, solver, state)?;
+        release(prep, solver, state);
         stats.released_after_frame = Some(frame);
     }
     stats.settled = settle::check(prep, stats, frame);

@@ -1,0 +1,224 @@
+//! The state `bench convergence` measures from: the scene run on the CPU at its own spacing to
+//! a representative frame, carried onto a finer meshing through the pattern (or grid)
+//! coordinates, as the coarse start does, and run on there a few frames. Attached particles
+//! are held, or let go, as the run itself holds them at that frame.
+
+use crate::cpu::CpuSolver;
+use crate::error::Error;
+use crate::mesh::Charted;
+use crate::pattern::transfer::Transfer;
+use crate::scene::{ClothSource, Scene};
+use crate::sim::{
+    carried, packed_at, phase_params, prepare, release, simulate, substep_params, Prepared,
+    RunStats,
+};
+use crate::solver::{ParticleState, Solver};
+
+/// The scene with its particle spacing divided by `r`.
+pub fn refined(scene: &Scene, r: u32) -> Scene {
+    let mut s = scene.clone();
+    match &mut s.cloth {
+        ClothSource::Pattern { options, .. } => options.particle_distance /= r as f64,
+        ClothSource::Grid { columns, rows, .. } => {
+            *columns = (*columns - 1) * r + 1;
+            *rows = (*rows - 1) * r + 1;
+        }
+        ClothSource::Mesh { .. } => {}
+    }
+    s.solver.multigrid = true;
+    s.solver.strain_limit = None;
+    s
+}
+
+/// The scene run on the CPU to its representative frame: its prepared run, the state, the run's
+/// stats and the frame.
+pub fn representative_state(
+    scene: &Scene,
+    frames: Option<u32>,
+) -> Result<(Prepared, ParticleState, RunStats, u32), Error> {
+    let mut prep = prepare(&refined(scene, 1))?;
+    if let Some(f) = frames {
+        prep.frames = f;
+        prep.settle_speed = None;
+    }
+    let mut solver = CpuSolver::new(&prep.model, prep.params, &prep.plan);
+    let mut stats = RunStats::default();
+    let mut last = solver.state()?;
+    simulate(&prep, &mut solver, &mut stats, |_, s| {
+        last = s.clone();
+        Ok(())
+    })?;
+    let frame = stats.frames_run;
+    Ok((prep, last, stats, frame))
+}
+
+/// `frames` more frames of `prep` from `state` at the end of frame `frame`: the state then, and
+/// the frame.
+pub fn continue_run(
+    prep: &Prepared,
+    state: ParticleState,
+    stats: &RunStats,
+    frame: u32,
+    frames: u32,
+) -> Result<(ParticleState, u32), Error> {
+    if frames == 0 {
+        return Ok((state, frame));
+    }
+    let params = phase_params(prep, frame, stats);
+    let mut solver = CpuSolver::new(&prep.model, params, &prep.plan);
+    solver.set_state(&state);
+    for f in frame + 1..=frame + frames {
+        solver.advance(&substep_params(prep, f))?;
+        if f == prep.attach_frames && !prep.attached.is_empty() {
+            let state = solver.state()?;
+            release(prep, &mut solver, state);
+        }
+    }
+    Ok((solver.state()?, frame + frames))
+}
+
+/// The cloth's chart coordinates (pattern panels or grid plane).
+fn charted(scene: &Scene, prep: &Prepared) -> Option<Charted> {
+    match &scene.cloth {
+        ClothSource::Grid {
+            width,
+            height,
+            columns,
+            rows,
+            ..
+        } => Some(Charted::grid(*width, *height, *columns, *rows)),
+        _ => prep.garment.as_ref().map(|g| g.charted()),
+    }
+}
+
+/// `state` of the scene's own meshing at the end of output frame `frame` carried onto
+/// `fine`'s particles through the charts, its particles held as they are then.
+pub fn map_state(
+    (scene, base): (&Scene, &Prepared),
+    state: &ParticleState,
+    (fine_scene, fine): (&Scene, &Prepared),
+    frame: u32,
+) -> Result<ParticleState, Error> {
+    let transfer = Transfer::between(&chart_of(scene, base)?, &chart_of(fine_scene, fine)?);
+    Ok(carried(&transfer, state, &packed_at(fine, frame)))
+}
+
+/// The cloth's chart coordinates, or the error that it has none.
+pub fn chart_of(scene: &Scene, prep: &Prepared) -> Result<Charted, Error> {
+    charted(scene, prep).ok_or_else(|| {
+        Error::Input(scene.error(
+            "solver",
+            "multigrid",
+            "the cloth has no chart coordinates to carry its state between meshings",
+            "use a grid or pattern cloth",
+        ))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    /// A 20 cm square of cotton meshed at 2 cm in implicit Euler's 4 steps a frame, held by
+    /// its top edge (labelled `lower_interface`) for its first two frames, then let go to fall;
+    /// and the folder of its files, for the test to remove.
+    fn released_square(name: &str) -> (Scene, PathBuf) {
+        let dir = std::env::temp_dir().join(format!(
+            "drapekit-measured-state-{}-{name}",
+            std::process::id()
+        ));
+        std::fs::create_dir_all(&dir).unwrap();
+        let pattern = r#"{"pattern": {"panels": {"a": {"translation": [0, 100, 0],
+            "rotation": [0, 0, 0], "vertices": [[0, 0], [20, 0], [20, 20], [0, 20]],
+            "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]},
+                      {"endpoints": [2, 3], "label": "lower_interface"}, {"endpoints": [3, 0]}]}},
+            "stitches": []}, "properties": {"units_in_meter": 100}}"#;
+        std::fs::write(dir.join("square.json"), pattern).unwrap();
+        let path = dir.join("square.toml");
+        let text = "[cloth.pattern]\npath = \"square.json\"\nparticle_distance_m = 0.02\n\
+             attach_labels = [\"lower_interface\"]\nattach_frames = 2\n\
+             [fabric]\npreset = \"cotton\"\n\
+             [world]\ngravity_m_s2 = [0.0, -9.81, 0.0]\n\
+             [solver]\nfps = 24\nframes = 24\nsubsteps = 4\nintegrator = \"implicit\"\n";
+        std::fs::write(&path, text).unwrap();
+        (Scene::load(&path).unwrap(), dir)
+    }
+
+    /// How far each attached particle of `prep` is below its place in the model, in m.
+    fn drops(prep: &Prepared, state: &ParticleState) -> Vec<f32> {
+        (prep.attached.iter())
+            .map(|&i| prep.model.positions[i as usize].y - state.positions[i as usize].y)
+            .collect()
+    }
+
+    #[test]
+    fn carried_before_the_release_the_attached_particles_stay_where_the_model_holds_them() {
+        let (scene, dir) = released_square("before");
+        let (base, state, _, frame) = representative_state(&scene, Some(1)).unwrap();
+        assert_eq!(frame, 1);
+        assert_eq!(base.attached.len(), 11, "the top edge at 2 cm");
+        let mapped = map_state((&scene, &base), &state, (&scene, &base), frame).unwrap();
+        for &i in &base.attached {
+            let p = mapped.positions[i as usize];
+            assert_eq!(
+                p,
+                base.model.positions[i as usize].extend(0.0),
+                "particle {i}"
+            );
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn carried_after_the_release_the_attached_particles_are_free_where_they_fell() {
+        let (scene, dir) = released_square("after");
+        let (base, state, _, frame) = representative_state(&scene, Some(4)).unwrap();
+        assert_eq!(frame, 4);
+        let mapped = map_state((&scene, &base), &state, (&scene, &base), frame).unwrap();
+        // Let go after frame 2, the square falls for two frames (8 steps of h = 1/96 s): from
+        // rest, backward Euler drops it h²·g·(1 + … + 8) = 3.8 cm; the cloth below them only
+        // slows the top edge, and not to a third of that.
+        for (k, drop) in drops(&base, &state).into_iter().enumerate() {
+            assert!(drop > 0.01, "attached particle {k} fell only {drop} m");
+        }
+        for &i in &base.attached {
+            let (p, s) = (mapped.positions[i as usize], state.positions[i as usize]);
+            assert_eq!(
+                p.w,
+                1.0 / base.model.masses[i as usize],
+                "particle {i} held"
+            );
+            // The same meshing: each particle blends from a triangle of its own at weights
+            // (1, 0, 0) up to their rounding, a few ulps of a metre-scale position.
+            let moved = p.truncate().distance(s.truncate());
+            assert!(
+                moved < 1e-5,
+                "particle {i} carried {moved} m from its place"
+            );
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn a_finer_meshing_run_on_past_the_release_lets_the_attached_particles_go() {
+        let (scene, dir) = released_square("finer");
+        let (base, state, stats, frame) = representative_state(&scene, Some(1)).unwrap();
+        let fine_scene = refined(&scene, 2);
+        let fine = prepare(&fine_scene).unwrap();
+        let mapped = map_state((&scene, &base), &state, (&fine_scene, &fine), frame).unwrap();
+        assert!((fine.attached.iter()).all(|&i| mapped.positions[i as usize].w == 0.0));
+        let (relaxed, at) = continue_run(&fine, mapped, &stats, frame, 2).unwrap();
+        assert_eq!(at, 3);
+        // Let go after frame 2, frame 3's four steps drop the square h²·g·(1 + … + 4) = 1.1 cm
+        // from rest; the cloth below only slows the top edge, and not to a third of that.
+        for (k, drop) in drops(&fine, &relaxed).into_iter().enumerate() {
+            assert!(drop > 0.0035, "attached particle {k} fell only {drop} m");
+        }
+        for &i in &fine.attached {
+            let w = relaxed.positions[i as usize].w;
+            assert_eq!(w, 1.0 / fine.model.masses[i as usize], "particle {i} held");
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
