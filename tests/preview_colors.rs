@@ -190,45 +190,12 @@ fn a_fixed_scene_renders_as_its_golden_image() {
     );
     let mut pixels = render(ctx, &meshes, &camera, w, h).unwrap();
     draw_legend(&mut pixels, w, h, &strain_legend(0.2));
-    let golden = common::fixture("golden/sheet_sphere_strain.png");
-    if std::env::var_os("DRAPEKIT_BLESS").is_some() {
-        drapekit::preview::write_png(&golden, &pixels, w, h).unwrap();
-    }
-    let want = image::open(&golden)
-        .unwrap_or_else(|e| {
-            panic!(
-                "{}: {e}; render it with DRAPEKIT_BLESS=1 cargo test --release --test preview_colors golden, \
-                 look at it, and commit it",
-                golden.display()
-            )
-        })
-        .to_rgba8();
-    assert_eq!((want.width(), want.height()), (w, h));
-    // Lavapipe rasterises deterministically, but another Mesa/LLVM may round a lit colour by
-    // a level or two and resolve a 2×2-supersampled edge sample the other way (one of four
-    // samples: up to a quarter of the edge's contrast). So: every pixel within 3 levels, except
-    // at most 1% of them (the silhouettes cover about 8% of this image); and none off by more
-    // than half the range, which a missing mesh, a wrong colour map or a moved camera exceeds.
-    let mut off = 0;
-    let mut worst = 0;
-    for (a, b) in pixels.chunks_exact(4).zip(want.as_raw().chunks_exact(4)) {
-        let d = (0..3)
-            .map(|c| (a[c] as i32 - b[c] as i32).abs())
-            .max()
-            .unwrap();
-        worst = worst.max(d);
-        off += (d > 3) as u32;
-    }
-    let allowed = w * h / 100;
-    if off > allowed || worst > 128 {
-        let diff = std::env::temp_dir().join("drapekit-golden-actual.png");
-        drapekit::preview::write_png(&diff, &pixels, w, h).unwrap();
-        panic!(
-            "{off} pixels differ by more than 3 levels (allowed {allowed}), worst {worst}; \
-             this render is in {}",
-            diff.display()
-        );
-    }
+    common::assert_golden(
+        &pixels,
+        (w, h),
+        "golden/sheet_sphere_strain.png",
+        "preview_colors",
+    );
 }
 
 #[test]

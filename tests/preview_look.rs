@@ -270,42 +270,10 @@ fn a_fixed_textured_scene_renders_as_its_golden_image() {
         w as f32 / h as f32,
     );
     let pixels = render_textured(ctx, &meshes, Some(&texture), &camera, w, h).unwrap();
-    let golden = common::fixture("golden/halfpipe_sphere_fabric.png");
-    if std::env::var_os("DRAPEKIT_BLESS").is_some() {
-        drapekit::preview::write_png(&golden, &pixels, w, h).unwrap();
-    }
-    let want = image::open(&golden)
-        .unwrap_or_else(|e| {
-            panic!(
-                "{}: {e}; render it with DRAPEKIT_BLESS=1 cargo test --release --test \
-                 preview_look golden, look at it, and commit it",
-                golden.display()
-            )
-        })
-        .to_rgba8();
-    assert_eq!((want.width(), want.height()), (w, h));
-    // As preview_colors.rs's golden image: within 3 levels but for 1% of the pixels (edges
-    // and, here, the texture's filtering may round a sample the other way on another
-    // Mesa/LLVM), and none off by half the range (a missing mesh or texture, a moved camera,
-    // occlusion lost).
-    let mut off = 0;
-    let mut worst = 0;
-    for (a, b) in pixels.chunks_exact(4).zip(want.as_raw().chunks_exact(4)) {
-        let d = (0..3)
-            .map(|c| (a[c] as i32 - b[c] as i32).abs())
-            .max()
-            .unwrap();
-        worst = worst.max(d);
-        off += (d > 3) as u32;
-    }
-    let allowed = w * h / 100;
-    if off > allowed || worst > 128 {
-        let diff = std::env::temp_dir().join("drapekit-golden-fabric-actual.png");
-        drapekit::preview::write_png(&diff, &pixels, w, h).unwrap();
-        panic!(
-            "{off} pixels differ by more than 3 levels (allowed {allowed}), worst {worst}; \
-             this render is in {}",
-            diff.display()
-        );
-    }
+    common::assert_golden(
+        &pixels,
+        (w, h),
+        "golden/halfpipe_sphere_fabric.png",
+        "preview_look",
+    );
 }

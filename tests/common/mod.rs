@@ -144,6 +144,54 @@ pub fn fixture(rel: &str) -> std::path::PathBuf {
     repo_root().join("fixtures").join(rel)
 }
 
+/// Asserts that `pixels` (RGBA, `w` × `h`), rendered by the test binary `test`'s `golden`
+/// test, match the golden image `fixtures/<rel>`; with `DRAPEKIT_BLESS` set, first writes them
+/// there (then look at the image, and commit it). On a mismatch the render is left in the
+/// temporary folder, and the message says where.
+pub fn assert_golden(pixels: &[u8], (w, h): (u32, u32), rel: &str, test: &str) {
+    let golden = fixture(rel);
+    if std::env::var_os("DRAPEKIT_BLESS").is_some() {
+        drapekit::preview::write_png(&golden, pixels, w, h).unwrap();
+    }
+    let want = image::open(&golden)
+        .unwrap_or_else(|e| {
+            panic!(
+                "{}: {e}; render it with DRAPEKIT_BLESS=1 cargo test --release --test {test} \
+                 golden, look at it, and commit it",
+                golden.display()
+            )
+        })
+        .to_rgba8();
+    assert_eq!((want.width(), want.height()), (w, h));
+    // Lavapipe rasterises deterministically, but another Mesa/LLVM may round a lit colour by
+    // a level or two and resolve a 2×2-supersampled edge sample, or a texture's filtering, the
+    // other way (one of four samples: up to a quarter of the edge's contrast). So: every pixel
+    // within 3 levels, except at most 1% of them (the silhouettes cover about 8% of these
+    // images); and none off by more than half the range, which a missing mesh or texture, a
+    // wrong colour map, a moved camera or lost occlusion exceeds.
+    let mut off = 0;
+    let mut worst = 0;
+    for (a, b) in pixels.chunks_exact(4).zip(want.as_raw().chunks_exact(4)) {
+        let d = (0..3)
+            .map(|c| (a[c] as i32 - b[c] as i32).abs())
+            .max()
+            .unwrap();
+        worst = worst.max(d);
+        off += (d > 3) as u32;
+    }
+    let allowed = w * h / 100;
+    if off > allowed || worst > 128 {
+        let stem = golden.file_stem().unwrap().to_string_lossy();
+        let actual = std::env::temp_dir().join(format!("drapekit-golden-{stem}-actual.png"));
+        drapekit::preview::write_png(&actual, pixels, w, h).unwrap();
+        panic!(
+            "{off} pixels differ by more than 3 levels (allowed {allowed}), worst {worst}; \
+             this render is in {}",
+            actual.display()
+        );
+    }
+}
+
 /// A 1 m × 0.6 m sheet in the xy plane at z = 0, 20 × 12 quads.
 pub fn sheet(color: glam::Vec3) -> drapekit::preview::DrawMesh {
     let (nx, ny) = (21u32, 13u32);
