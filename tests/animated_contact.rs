@@ -394,7 +394,8 @@ fn tshirt_walk_runs_whole_sewn_on_the_shoulders_and_outside_the_deformed_body() 
     assert!(deepest <= thickness, "a particle was {deepest} m inside");
     let last = (frames.len() - 1) as u32;
     let shown = drapekit::health::result::show_through(&prep, frames.last().unwrap(), last);
-    assert_eq!(shown.expect("the scene has a body").particles, 0);
+    let shown = shown.expect("the scene has a body");
+    assert_eq!(shown.particles, 0, "{shown:?}");
     // Still sewn at the end by the run's own rule (`seam_closed_gap_m`).
     assert!(
         widest < prep.seam_closed_gap,

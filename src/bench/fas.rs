@@ -51,11 +51,12 @@ pub struct Fas {
 }
 
 /// A coarse level as `Fas::new` takes it: its solver (at the finer level's step), its model's
-/// packed positions and its chart.
+/// packed positions at the measured frame and its chart.
 pub struct CoarseLevel {
     /// The level's solver, with its phase parameters.
     pub solver: CpuSolver,
-    /// `ClothModel::packed_positions` of its model.
+    /// `sim::packed_at` of its run at the measured frame: where its held particles are, and
+    /// each particle's inverse mass then.
     pub packed: Vec<Vec4>,
     /// Its particles' chart coordinates.
     pub chart: Charted,

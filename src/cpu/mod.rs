@@ -167,7 +167,7 @@ impl CpuSolver {
     /// let prep = prepare(&scene)?;
     /// let mut solver = CpuSolver::new(&prep.model, prep.params, &prep.plan);
     /// // One output frame: its substeps in one call, then read the state back.
-    /// solver.advance(&substep_params(&prep, 0))?;
+    /// solver.advance(&substep_params(&prep, 1))?;
     /// let state = solver.state()?;
     /// // Falling from rest: everything moves down.
     /// assert!(state.velocities.iter().all(|v| v.y < 0.0));

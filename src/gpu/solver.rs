@@ -96,7 +96,7 @@ impl GpuSolver {
     /// };
     /// let mut gpu = GpuSolver::new(&ctx, &prep.model, prep.params, &prep.plan, 64)?;
     /// let mut cpu = CpuSolver::new(&prep.model, prep.params, &prep.plan);
-    /// let steps = substep_params(&prep, 0);
+    /// let steps = substep_params(&prep, 1);
     /// gpu.advance(&steps)?;
     /// cpu.advance(&steps)?;
     /// // The GPU pass and its CPU twin agree (bit for bit on lavapipe; within rounding elsewhere).

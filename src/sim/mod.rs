@@ -374,7 +374,13 @@ pub fn prepare(scene: &Scene) -> Result<Prepared, Error> {
 }
 
 /// The per-substep values of output frame `frame` (1-based): its time and wind.
+///
+/// Panics at frame 0, the initial state, which no step leads to.
 pub fn substep_params(prep: &Prepared, frame: u32) -> Vec<SubstepParams> {
+    assert!(
+        frame >= 1,
+        "output frames count from 1: frame 0 is the initial state"
+    );
     (0..prep.substeps)
         .map(|s| {
             let t = ((frame - 1) as f64 * prep.frame_dt as f64 + s as f64 * prep.params.dt as f64)

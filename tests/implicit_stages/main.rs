@@ -941,7 +941,7 @@ integrator = "implicit"
     );
     let mut cpu = cpu::CpuSolver::new(&prep.model, prep.params, &prep.plan);
     let state = cpu.state().unwrap();
-    let step = substep_params(&prep, 0)[0];
+    let step = substep_params(&prep, 1)[0];
     let mut g = GpuSolver::new(ctx, &prep.model, prep.params, &prep.plan, 1).unwrap();
     g.set_state(&state);
     g.run_passes(&[Pass::VbdInit], &[step]).unwrap();
