@@ -64,14 +64,20 @@ pub fn continue_run(
     if frames == 0 {
         return Ok((state, frame));
     }
-    let params = phase_params(prep, frame, stats);
+    let mut params = phase_params(prep, frame, stats);
     let mut solver = CpuSolver::new(&prep.model, params, &prep.plan);
     solver.set_state(&state);
     for f in frame + 1..=frame + frames {
         solver.advance(&substep_params(prep, f))?;
+        // What the run does after each frame: attachments let go, gravity switched on.
         if f == prep.attach_frames && !prep.attached.is_empty() {
             let state = solver.state()?;
             release(prep, &mut solver, state);
+        }
+        let next = phase_params(prep, f, stats);
+        if next != params {
+            solver.set_params(&next);
+            params = next;
         }
     }
     Ok((solver.state()?, frame + frames))
@@ -121,9 +127,9 @@ mod tests {
     use std::path::PathBuf;
 
     /// A 20 cm square of cotton meshed at 2 cm in implicit Euler's 4 steps a frame, held by
-    /// its top edge (labelled `lower_interface`) for its first two frames, then let go to fall;
-    /// and the folder of its files, for the test to remove.
-    fn released_square(name: &str) -> (Scene, PathBuf) {
+    /// its top edge (labelled `lower_interface`) for its first two frames, then let go to fall,
+    /// with the `[world]` keys `world`; and the folder of its files, for the test to remove.
+    fn released_square(name: &str, world: &str) -> (Scene, PathBuf) {
         let dir = std::env::temp_dir().join(format!(
             "drapekit-measured-state-{}-{name}",
             std::process::id()
@@ -136,11 +142,13 @@ mod tests {
             "stitches": []}, "properties": {"units_in_meter": 100}}"#;
         std::fs::write(dir.join("square.json"), pattern).unwrap();
         let path = dir.join("square.toml");
-        let text = "[cloth.pattern]\npath = \"square.json\"\nparticle_distance_m = 0.02\n\
+        let text = format!(
+            "[cloth.pattern]\npath = \"square.json\"\nparticle_distance_m = 0.02\n\
              attach_labels = [\"lower_interface\"]\nattach_frames = 2\n\
              [fabric]\npreset = \"cotton\"\n\
-             [world]\ngravity_m_s2 = [0.0, -9.81, 0.0]\n\
-             [solver]\nfps = 24\nframes = 24\nsubsteps = 4\nintegrator = \"implicit\"\n";
+             [world]\ngravity_m_s2 = [0.0, -9.81, 0.0]\n{world}\n\
+             [solver]\nfps = 24\nframes = 24\nsubsteps = 4\nintegrator = \"implicit\"\n"
+        );
         std::fs::write(&path, text).unwrap();
         (Scene::load(&path).unwrap(), dir)
     }
@@ -154,7 +162,7 @@ mod tests {
 
     #[test]
     fn carried_before_the_release_the_attached_particles_stay_where_the_model_holds_them() {
-        let (scene, dir) = released_square("before");
+        let (scene, dir) = released_square("before", "");
         let (base, state, _, frame) = representative_state(&scene, Some(1)).unwrap();
         assert_eq!(frame, 1);
         assert_eq!(base.attached.len(), 11, "the top edge at 2 cm");
@@ -172,7 +180,7 @@ mod tests {
 
     #[test]
     fn carried_after_the_release_the_attached_particles_are_free_where_they_fell() {
-        let (scene, dir) = released_square("after");
+        let (scene, dir) = released_square("after", "");
         let (base, state, _, frame) = representative_state(&scene, Some(4)).unwrap();
         assert_eq!(frame, 4);
         let mapped = map_state((&scene, &base), &state, (&scene, &base), frame).unwrap();
@@ -203,7 +211,7 @@ mod tests {
     #[test]
     fn a_finer_meshing_run_on_to_the_release_frame_lets_them_go_after_it() {
         // Frame 2 is stepped with them held; they are let go at its end.
-        let (scene, dir) = released_square("at");
+        let (scene, dir) = released_square("at", "");
         let (base, state, stats, frame) = representative_state(&scene, Some(1)).unwrap();
         let fine_scene = refined(&scene, 2);
         let fine = prepare(&fine_scene).unwrap();
@@ -227,8 +235,28 @@ mod tests {
     }
 
     #[test]
+    fn a_finer_meshing_run_on_switches_gravity_on_when_the_run_does() {
+        // Gravity from 0.07 s: on after frame 2 (at 24 fps), when the top edge is let go too.
+        // Run on from frame 1, frame 3 must fall as in the test below; with frame 1's
+        // parameters kept, nothing pulls the square down.
+        let (scene, dir) = released_square("gravity", "gravity_start_s = 0.07");
+        let (base, state, stats, frame) = representative_state(&scene, Some(1)).unwrap();
+        assert_eq!(base.gravity.1, 2, "gravity on after frame 2");
+        let fine_scene = refined(&scene, 2);
+        let fine = prepare(&fine_scene).unwrap();
+        let mapped = map_state((&scene, &base), &state, (&fine_scene, &fine), frame).unwrap();
+        let (relaxed, _) = continue_run(&fine, mapped, &stats, frame, 2).unwrap();
+        // Frame 3's four steps from rest drop it h²·g·(1 + … + 4) = 1.1 cm; with gravity off
+        // from the start, nothing moves it.
+        for (k, drop) in drops(&fine, &relaxed).into_iter().enumerate() {
+            assert!(drop > 0.0035, "attached particle {k} fell only {drop} m");
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
     fn a_finer_meshing_run_on_past_the_release_lets_the_attached_particles_go() {
-        let (scene, dir) = released_square("finer");
+        let (scene, dir) = released_square("finer", "");
         let (base, state, stats, frame) = representative_state(&scene, Some(1)).unwrap();
         let fine_scene = refined(&scene, 2);
         let fine = prepare(&fine_scene).unwrap();
