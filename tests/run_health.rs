@@ -278,6 +278,10 @@ fn a_cloth_that_is_slow_because_the_solve_carries_no_load_has_not_settled() {
     // particle's whole weight or more (measured 1.57), and the sheet barely stretched.
     assert_eq!(slow["settled"]["frame"], 1, "{slow:#}");
     assert!(f(slow, "force_residual_rms") >= 1.0, "{slow:#}");
+    // And it is told so; the run that rests by the settle rule is not.
+    let unbalanced = |s: &serde_json::Value| s["warnings"].to_string().contains("unbalanced");
+    assert!(unbalanced(slow), "{slow:#}");
+    assert!(!unbalanced(rested), "{rested:#}");
     // The settle rule waits for the balance (measured: frame 86, residual 0.038). By then the
     // sheet carries its weight to the pins, and its most loaded edge, at a corner, stretches
     // more than ten times as far as at the speed rule's stop (measured 0.45% and 0.031%).
