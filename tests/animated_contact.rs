@@ -333,81 +333,59 @@ fn tshirt_walk_short_stays_outside_the_deformed_body() {
     assert_eq!(shown.particles, 0, "{shown:?}");
 }
 
+/// Runs the shipped walking garment `scenes/<name>.toml` whole and asserts what every such run
+/// must keep: all its frames, no particle deeper than the thickness in the exact deformed mesh
+/// at any of them, every seam closed at the end by the run's own rule (`seam_closed_gap_m`),
+/// and the garment still on the body (one thrown off touches it nowhere). Returns the run.
+fn walks_whole_sewn_on_the_body(name: &str) -> (Prepared, Vec<Vec<Vec4>>, RunStats) {
+    let path = common::fixture(&format!("scenes/{name}.toml"));
+    let prep = prepare(&Scene::load(&path).unwrap()).unwrap();
+    let (frames, stats) = run(&prep);
+    assert_eq!(frames.len() - 1, prep.frames as usize, "the walk ran whole");
+    let thickness = prep.params.bodies[0].thickness;
+    let deepest = (stats.deformed_penetration_m.iter())
+        .map(|(_, d)| *d)
+        .fold(0.0f32, f32::max);
+    let widest = stats.seam_gaps.iter().fold(0.0f32, |a, &b| a.max(b));
+    eprintln!(
+        "{name}: {} substeps a frame, deepest {deepest:.2e} m, widest seam gap {widest:.2e} m, \
+         {} touching at the end, strain {:.4} largest over the run, {:.4} p99 at the end",
+        prep.substeps, stats.body_contacts, stats.max_edge_strain, stats.last_edge_strain_p99
+    );
+    assert_eq!(stats.deformed_penetration_m.len(), frames.len() - 1);
+    assert!(deepest <= thickness, "a particle was {deepest} m inside");
+    assert!(
+        widest < prep.seam_closed_gap,
+        "a seam is {widest} m open (closed below {} m)",
+        prep.seam_closed_gap
+    );
+    assert!(
+        stats.body_contacts > prep.model.len() / 20,
+        "{} particles touch the body",
+        stats.body_contacts
+    );
+    (prep, frames, stats)
+}
+
 #[test]
 fn skirt_walk_runs_whole_sewn_on_the_hips_and_outside_the_deformed_body() {
     // The shipped walking skirt, whole: sewn around the hips in the A-pose, then the blend into
     // the walk and one walk cycle, at the 25 substeps a frame that the walk's knees and feet
     // (1.7 m/s, 3 mm thickness) set. It once diverged mid-stride where the skin folds by a
     // knee (docs/src/implicit.md, known limits).
-    let prep = prepare(&Scene::load(&common::fixture("scenes/skirt_walk.toml")).unwrap()).unwrap();
-    let (frames, stats) = run(&prep);
-    assert_eq!(frames.len() - 1, prep.frames as usize, "the walk ran whole");
-    let thickness = prep.params.bodies[0].thickness;
-    let deepest = (stats.deformed_penetration_m.iter())
-        .map(|(_, d)| *d)
-        .fold(0.0f32, f32::max);
-    let widest = stats.seam_gaps.iter().fold(0.0f32, |a, &b| a.max(b));
-    eprintln!(
-        "skirt_walk: {} substeps a frame, deepest {deepest:.2e} m, widest seam gap {widest:.2e} \
-         m, {} touching at the end, strain {:.4} largest over the run, {:.4} p99 at the end",
-        prep.substeps, stats.body_contacts, stats.max_edge_strain, stats.last_edge_strain_p99
-    );
-    // Every output frame is measured against the exact deformed mesh: no particle deeper than
-    // the thickness at any of them.
-    assert_eq!(stats.deformed_penetration_m.len(), frames.len() - 1);
-    assert!(deepest <= thickness, "a particle was {deepest} m inside");
-    // Still sewn at the end by the run's own rule (`seam_closed_gap_m`).
-    assert!(
-        widest < prep.seam_closed_gap,
-        "a seam is {widest} m open (closed below {} m)",
-        prep.seam_closed_gap
-    );
-    // Still on the hips: a skirt thrown off the body touches it nowhere.
-    assert!(
-        stats.body_contacts > prep.model.len() / 20,
-        "{} particles touch the body",
-        stats.body_contacts
-    );
+    walks_whole_sewn_on_the_body("skirt_walk");
 }
 
 #[test]
 fn tshirt_walk_runs_whole_sewn_on_the_shoulders_and_outside_the_deformed_body() {
     // The shipped walking T-shirt, whole: sewn in the A-pose, the arms lowered over 1.5 s,
     // then one walk cycle, at the 25 substeps a frame that the walk's knees and feet set.
-    let scene = Scene::load(&common::fixture("scenes/tshirt_walk.toml")).unwrap();
-    let prep = prepare(&scene).unwrap();
-    let (frames, stats) = run(&prep);
-    assert_eq!(frames.len() - 1, prep.frames as usize, "the walk ran whole");
-    let thickness = prep.params.bodies[0].thickness;
-    let deepest = (stats.deformed_penetration_m.iter())
-        .map(|(_, d)| *d)
-        .fold(0.0f32, f32::max);
-    let widest = stats.seam_gaps.iter().fold(0.0f32, |a, &b| a.max(b));
-    eprintln!(
-        "tshirt_walk: {} substeps a frame, deepest {deepest:.2e} m, widest seam gap {widest:.2e} \
-         m, {} touching at the end, strain {:.4} largest over the run, {:.4} p99 at the end",
-        prep.substeps, stats.body_contacts, stats.max_edge_strain, stats.last_edge_strain_p99
-    );
-    // Every output frame is measured against the exact deformed mesh: no particle deeper than
-    // the thickness at any of them, and none inside the body as it stands at the last.
-    assert_eq!(stats.deformed_penetration_m.len(), frames.len() - 1);
-    assert!(deepest <= thickness, "a particle was {deepest} m inside");
+    let (prep, frames, stats) = walks_whole_sewn_on_the_body("tshirt_walk");
+    // None of it inside the body as it stands at the last frame.
     let last = (frames.len() - 1) as u32;
     let shown = drapekit::health::result::show_through(&prep, frames.last().unwrap(), last);
     let shown = shown.expect("the scene has a body");
     assert_eq!(shown.particles, 0, "{shown:?}");
-    // Still sewn at the end by the run's own rule (`seam_closed_gap_m`).
-    assert!(
-        widest < prep.seam_closed_gap,
-        "a seam is {widest} m open (closed below {} m)",
-        prep.seam_closed_gap
-    );
-    // Still on the shoulders: a shirt thrown off the body touches it nowhere.
-    assert!(
-        stats.body_contacts > prep.model.len() / 20,
-        "{} particles touch the body",
-        stats.body_contacts
-    );
     // Not torn apart: where a lowered arm presses the shirt against the torso its edges
     // stretch up to 15% over the run (measured: the book's Bodies chapter), while a solve
     // that diverges throws edges past 100% (the walking skirt's once reached 247%).

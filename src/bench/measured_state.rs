@@ -190,13 +190,9 @@ mod tests {
         for (k, drop) in drops(&base, &state).into_iter().enumerate() {
             assert!(drop > 0.01, "attached particle {k} fell only {drop} m");
         }
+        assert_let_go(&base, &mapped);
         for &i in &base.attached {
             let (p, s) = (mapped.positions[i as usize], state.positions[i as usize]);
-            assert_eq!(
-                p.w,
-                1.0 / base.model.masses[i as usize],
-                "particle {i} held"
-            );
             // The same meshing: each particle blends from a triangle of its own at weights
             // (1, 0, 0) up to their rounding, a few ulps of a metre-scale position.
             let moved = p.truncate().distance(s.truncate());
@@ -208,15 +204,48 @@ mod tests {
         std::fs::remove_dir_all(&dir).ok();
     }
 
-    #[test]
-    fn a_finer_meshing_run_on_to_the_release_frame_lets_them_go_after_it() {
-        // Frame 2 is stepped with them held; they are let go at its end.
-        let (scene, dir) = released_square("at", "");
+    /// The square of `released_square(name, world)` run to frame 1 at 2 cm, carried onto its
+    /// 1 cm meshing and run on there `frames` frames (`continue_run`).
+    struct RunOn {
+        /// The 2 cm run.
+        base: Prepared,
+        /// The 1 cm meshing.
+        fine: Prepared,
+        /// The carried state at frame 1.
+        mapped: ParticleState,
+        /// The state `frames` frames on, and its frame.
+        relaxed: (ParticleState, u32),
+    }
+
+    fn run_on_finer(name: &str, world: &str, frames: u32) -> RunOn {
+        let (scene, dir) = released_square(name, world);
         let (base, state, stats, frame) = representative_state(&scene, Some(1)).unwrap();
         let fine_scene = refined(&scene, 2);
         let fine = prepare(&fine_scene).unwrap();
         let mapped = map_state((&scene, &base), &state, (&fine_scene, &fine), frame).unwrap();
-        let (relaxed, at) = continue_run(&fine, mapped, &stats, frame, 1).unwrap();
+        let relaxed = continue_run(&fine, mapped.clone(), &stats, frame, frames).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        RunOn {
+            base,
+            fine,
+            mapped,
+            relaxed,
+        }
+    }
+
+    /// Asserts that every attached particle of `prep` has its inverse mass in `state`.
+    fn assert_let_go(prep: &Prepared, state: &ParticleState) {
+        for &i in &prep.attached {
+            let w = state.positions[i as usize].w;
+            assert_eq!(w, 1.0 / prep.model.masses[i as usize], "particle {i} held");
+        }
+    }
+
+    #[test]
+    fn a_finer_meshing_run_on_to_the_release_frame_lets_them_go_after_it() {
+        // Frame 2 is stepped with them held; they are let go at its end.
+        let RunOn { fine, relaxed, .. } = run_on_finer("at", "", 1);
+        let (relaxed, at) = relaxed;
         assert_eq!(at, 2);
         for &i in &fine.attached {
             let (p, i) = (relaxed.positions[i as usize], i as usize);
@@ -225,13 +254,8 @@ mod tests {
                 fine.model.positions[i],
                 "particle {i} moved in frame 2"
             );
-            assert_eq!(
-                p.w,
-                1.0 / fine.model.masses[i],
-                "particle {i} still held after it"
-            );
         }
-        std::fs::remove_dir_all(&dir).ok();
+        assert_let_go(&fine, &relaxed);
     }
 
     #[test]
@@ -239,30 +263,30 @@ mod tests {
         // Gravity from 0.07 s: on after frame 2 (at 24 fps), when the top edge is let go too.
         // Run on from frame 1, frame 3 must fall as in the test below; with frame 1's
         // parameters kept, nothing pulls the square down.
-        let (scene, dir) = released_square("gravity", "gravity_start_s = 0.07");
-        let (base, state, stats, frame) = representative_state(&scene, Some(1)).unwrap();
+        let RunOn {
+            base,
+            fine,
+            relaxed,
+            ..
+        } = run_on_finer("gravity", "gravity_start_s = 0.07", 2);
         assert_eq!(base.gravity.1, 2, "gravity on after frame 2");
-        let fine_scene = refined(&scene, 2);
-        let fine = prepare(&fine_scene).unwrap();
-        let mapped = map_state((&scene, &base), &state, (&fine_scene, &fine), frame).unwrap();
-        let (relaxed, _) = continue_run(&fine, mapped, &stats, frame, 2).unwrap();
         // Frame 3's four steps from rest drop it h²·g·(1 + … + 4) = 1.1 cm; with gravity off
         // from the start, nothing moves it.
-        for (k, drop) in drops(&fine, &relaxed).into_iter().enumerate() {
+        for (k, drop) in drops(&fine, &relaxed.0).into_iter().enumerate() {
             assert!(drop > 0.0035, "attached particle {k} fell only {drop} m");
         }
-        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]
     fn a_finer_meshing_run_on_past_the_release_lets_the_attached_particles_go() {
-        let (scene, dir) = released_square("finer", "");
-        let (base, state, stats, frame) = representative_state(&scene, Some(1)).unwrap();
-        let fine_scene = refined(&scene, 2);
-        let fine = prepare(&fine_scene).unwrap();
-        let mapped = map_state((&scene, &base), &state, (&fine_scene, &fine), frame).unwrap();
+        let RunOn {
+            fine,
+            mapped,
+            relaxed,
+            ..
+        } = run_on_finer("finer", "", 2);
         assert!((fine.attached.iter()).all(|&i| mapped.positions[i as usize].w == 0.0));
-        let (relaxed, at) = continue_run(&fine, mapped, &stats, frame, 2).unwrap();
+        let (relaxed, at) = relaxed;
         assert_eq!(at, 3);
         // Let go after frame 2, frame 3's four steps drop the square h²·g·(1 + … + 4) = 1.1 cm
         // from rest. The stretched cloth below pulls the top edge down faster still; only
@@ -270,10 +294,6 @@ mod tests {
         for (k, drop) in drops(&fine, &relaxed).into_iter().enumerate() {
             assert!(drop > 0.0035, "attached particle {k} fell only {drop} m");
         }
-        for &i in &fine.attached {
-            let w = relaxed.positions[i as usize].w;
-            assert_eq!(w, 1.0 / fine.model.masses[i as usize], "particle {i} held");
-        }
-        std::fs::remove_dir_all(&dir).ok();
+        assert_let_go(&fine, &relaxed);
     }
 }
